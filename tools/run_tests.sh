@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Runs every test of the workspace, or of the packages named as arguments:
+#   1. unit tests: pytest over catkin_ws/src/<pkg>/test/unit (no ROS master needed),
+#   2. integration tests: every catkin_ws/src/<pkg>/test/*.test with rostest.
+# Each rostest runs in its own network namespace (unshare -n) when the kernel allows it, so that several
+# rostests (or a developer's roscore) never fight over the master port. Prints 'N passed, N failed'.
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck disable=SC1091
+source "$ROOT/env.sh"
+SRC="$ROOT/catkin_ws/src"
+RESULTS="${TEST_RESULTS_DIR:-$ROOT/test_results}"
+mkdir -p "$RESULTS"
+if [ $# -gt 0 ]; then PKGS=("$@"); else mapfile -t PKGS < <(ls "$SRC" | sort); fi
+ROSTEST_TIMEOUT="${ROSTEST_TIMEOUT:-600}"
+passed=0; failed=0; failures=()
+
+# ---- unit tests ----------------------------------------------------------------------------------
+unit_dirs=()
+for p in "${PKGS[@]}"; do [ -d "$SRC/$p/test/unit" ] && unit_dirs+=("$SRC/$p/test/unit"); done
+if ((${#unit_dirs[@]})); then
+  echo "=== unit tests: ${unit_dirs[*]#$SRC/}"
+  python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$RESULTS/unit.xml" "${unit_dirs[@]}" \
+    2>&1 | tee "$RESULTS/unit.log"
+  rc=${PIPESTATUS[0]}
+  n_pass=$(python - "$RESULTS/unit.xml" <<'PY'
+import sys, xml.etree.ElementTree as ET
+r = ET.parse(sys.argv[1]).getroot(); s = r if r.tag == "testsuite" else r.find("testsuite")
+t, f, e, sk = (int(s.get(k, 0)) for k in ("tests", "failures", "errors", "skipped"))
+print(t - f - e - sk, f + e)
+PY
+)
+  read -r up uf <<<"$n_pass"
+  passed=$((passed + up)); failed=$((failed + uf))
+  if [ "$rc" -ne 0 ] && [ "$uf" -eq 0 ]; then failed=$((failed + 1)); failures+=("pytest exit $rc"); fi
+  [ "$uf" -gt 0 ] && failures+=("$uf unit test(s)")
+fi
+
+# ---- rostest -------------------------------------------------------------------------------------
+isolate=()
+if unshare -n true 2>/dev/null; then isolate=(unshare -n sh -c 'ip link set lo up 2>/dev/null; exec "$@"' sh); fi
+for p in "${PKGS[@]}"; do
+  for t in "$SRC/$p"/test/*.test; do
+    [ -e "$t" ] || continue
+    name="$p/$(basename "$t")"
+    echo "=== rostest $name"
+    start=$(date +%s)
+    timeout -k 10 "$ROSTEST_TIMEOUT" "${isolate[@]}" rostest --text "$p" "$(basename "$t")" \
+      > "$RESULTS/${p}__$(basename "$t" .test).log" 2>&1
+    rc=$?
+    secs=$(( $(date +%s) - start ))
+    if [ $rc -eq 0 ]; then passed=$((passed + 1)); echo "    ok (${secs}s)"
+    else failed=$((failed + 1)); failures+=("$name"); echo "    FAILED rc=$rc (${secs}s), log:"
+         tail -60 "$RESULTS/${p}__$(basename "$t" .test).log" | sed 's/^/    | /'; fi
+  done
+done
+
+echo
+((${#failures[@]})) && printf 'failed: %s\n' "${failures[@]}"
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ] && [ "$passed" -gt 0 ]
