@@ -35,6 +35,8 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$STAMPS/venv" 2>/dev/null)" != "$req
 fi
 
 # ---- 3. catkin_make -------------------------------------------------------------------------------
+# One build at a time: several shells (or CI jobs) may call make at once.
+exec 9>"$STAMPS/catkin.lock"; flock 9
 # Rebuild only when a build input (package.xml, CMakeLists, msg/srv/action, setup.py) changed.
 src_hash="$(cd "$ROOT/catkin_ws/src" && find . \( -name package.xml -o -name CMakeLists.txt -o -name '*.msg' \
   -o -name '*.srv' -o -name '*.action' -o -name setup.py \) -not -path '*/node_modules/*' -print0 | sort -z \

@@ -6,8 +6,7 @@
 # rostests (or a developer's roscore) never fight over the master port. Prints 'N passed, N failed'.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-# shellcheck disable=SC1091
-source "$ROOT/env.sh"
+set +u; source "$ROOT/env.sh"; set -u  # ROS's setup scripts read unset variables
 SRC="$ROOT/catkin_ws/src"
 RESULTS="${TEST_RESULTS_DIR:-$ROOT/test_results}"
 mkdir -p "$RESULTS"
@@ -17,9 +16,10 @@ passed=0; failed=0; failures=()
 
 # ---- unit tests ----------------------------------------------------------------------------------
 unit_dirs=()
+[ $# -eq 0 ] && unit_dirs+=("$ROOT/tests")   # workspace-level checks
 for p in "${PKGS[@]}"; do [ -d "$SRC/$p/test/unit" ] && unit_dirs+=("$SRC/$p/test/unit"); done
 if ((${#unit_dirs[@]})); then
-  echo "=== unit tests: ${unit_dirs[*]#$SRC/}"
+  echo "=== unit tests: ${unit_dirs[*]#$ROOT/}"
   python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$RESULTS/unit.xml" "${unit_dirs[@]}" \
     2>&1 | tee "$RESULTS/unit.log"
   rc=${PIPESTATUS[0]}

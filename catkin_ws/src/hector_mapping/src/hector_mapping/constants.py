@@ -1,0 +1,67 @@
+"""Every constant of the package in one place: node parameter defaults and the algorithm's fixed numbers.
+
+The parameter names and defaults are the original hector_mapping node's, so that launch files written for
+it (like the thesis's) work unchanged. The thesis launch overrides some of them (see
+mbzirc_launchers/launch/c3_slam.launch).
+"""
+from __future__ import annotations
+
+#: ``~`` parameters of the node and their defaults (the original node's defaults).
+NODE_PARAM_DEFAULTS: dict[str, object] = {
+    "base_frame": "base_link",
+    "map_frame": "map",
+    "odom_frame": "odom",
+    "map_resolution": 0.025,
+    "map_size": 1024,
+    "map_start_x": 0.5,
+    "map_start_y": 0.5,
+    "map_multi_res_levels": 3,
+    "update_factor_free": 0.4,
+    "update_factor_occupied": 0.9,
+    "map_update_distance_thresh": 0.4,
+    "map_update_angle_thresh": 0.9,
+    "laser_min_dist": 0.4,
+    "laser_max_dist": 30.0,
+    "laser_z_min_value": -1.0,
+    "laser_z_max_value": 1.0,
+    "pub_map_odom_transform": True,
+    "pub_map_scanmatch_transform": True,
+    "pub_odometry": False,
+    "use_tf_scan_transformation": True,
+    "use_tf_pose_start_estimate": False,
+    "map_pub_period": 2.0,
+    "advertise_map_service": True,
+    "tf_map_scanmatch_transform_frame_name": "scanmatcher_frame",
+    "scan_topic": "scan",
+    "scan_subscriber_queue_size": 5,
+    "pub_drawings": False,
+    "pub_debug_output": False,
+}
+
+#: Log-odds values are clamped to +-this so that a cell can still change its mind after many scans and
+#: exp() never overflows.
+LOG_ODDS_LIMIT = 50.0
+
+#: Gauss-Newton iterations per scan on the coarse levels and on the finest level.
+ITERATIONS_COARSE = 4
+ITERATIONS_FINE = 6
+
+#: Largest rotation (rad) a single Gauss-Newton step may make: a step larger than this is almost always
+#: the linearisation running away, not the true motion.
+MAX_ROTATION_STEP = 0.2
+
+#: A scan with fewer usable points than this is not matched (the matching problem is under-determined).
+MIN_SCAN_POINTS = 10
+
+#: Scans whose angle count disagrees with (angle_max - angle_min) / angle_increment by more than this are
+#: rejected as malformed (1 allows both the "closed" and the "half-open" 360 degree conventions).
+ANGLE_COUNT_TOLERANCE = 1
+
+#: Floor added to the diagonal of the published pose covariance (m^2, m^2, rad^2): the Hessian-based
+#: estimate is optimistic when the scan fits perfectly.
+COVARIANCE_FLOOR = (1e-6, 1e-6, 1e-6)
+
+#: Values of nav_msgs/OccupancyGrid cells.
+OCC_OCCUPIED = 100
+OCC_FREE = 0
+OCC_UNKNOWN = -1
