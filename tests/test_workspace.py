@@ -46,3 +46,24 @@ def test_dockerfile_reuses_setup_script():
     dockerfile = (ROOT / "Dockerfile").read_text()
     assert dockerfile.startswith("#") and "FROM debian:bookworm" in dockerfile
     assert "setup/setup.sh" in dockerfile
+
+
+def test_compose_launches_exist_with_their_args():
+    """Every roslaunch of docker/compose.yaml names a launch file of the workspace and only args it declares."""
+    import yaml
+    compose = yaml.safe_load((ROOT / "docker" / "compose.yaml").read_text())
+    checked = 0
+    for name, service in compose["services"].items():
+        cmd = service.get("command", [])
+        if not cmd or cmd[0] != "roslaunch":
+            continue
+        words = [w for w in cmd[1:] if not w.startswith("--")]
+        pkg, launch, args = words[0], words[1], words[2:]
+        path = SRC / pkg / "launch" / launch
+        assert path.exists(), f"{name}: {path} missing"
+        declared = {a.get("name") for a in ET.parse(path).getroot().iter("arg")}
+        for a in args:
+            assert a.split(":=")[0] in declared, f"{name}: {launch} declares no arg {a.split(':=')[0]}"
+        assert service["environment"]["ROS_MASTER_URI"] == "http://master:11311"
+        checked += 1
+    assert checked >= 4

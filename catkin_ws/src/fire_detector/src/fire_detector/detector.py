@@ -1,0 +1,119 @@
+"""One thermal camera's fire detector without ROS: frame -> hot spot -> frame filter -> fire position."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+from fire_detector import constants as C
+from fire_detector.frame_filter import FrameFilter
+from fire_detector.geometry import downward_fire_position, forward_fire_position
+from fire_detector.thermal import HotSpot, find_hot_spot, parse_temperatures
+
+Vec3 = Tuple[float, float, float]
+
+
+@dataclass
+class DetectorConfig:
+    """Parameters of FireDetector (the node's `~` params, same names and defaults as the original)."""
+
+    camera_config: str = C.DEFAULT_CAMERA_CONFIG
+    thermal_threshold: float = C.DEFAULT_THERMAL_THRESHOLD
+    angle_amplitude: float = C.DEFAULT_ANGLE_AMPLITUDE_DEG
+    num_frame_filter: int = C.DEFAULT_NUM_FRAME_FILTER
+    false_negative_tolerance: int = C.DEFAULT_FALSE_NEGATIVE_TOLERANCE
+    min_peak_temperature: float = C.DEFAULT_MIN_PEAK_TEMPERATURE
+
+    def __post_init__(self) -> None:
+        if self.camera_config not in C.CAMERA_CONFIGS:
+            raise ValueError(f"camera_config must be one of {sorted(C.CAMERA_CONFIGS)}, got {self.camera_config!r}")
+
+    @property
+    def camera_direction(self) -> int:
+        return C.CAMERA_CONFIGS[self.camera_config]
+
+
+@dataclass
+class Fire:
+    """A confirmed fire in one frame.
+
+    Args:
+        position: arena-frame position (m).
+        relative_position: body-frame offset from the UAV (x forward, y left, z up).
+        depth: laser range (FORWARD) or height above the ground (DOWNWARD), metres.
+        spot: the hot spot in the image it comes from.
+    """
+
+    position: Vec3
+    relative_position: Vec3
+    depth: float
+    spot: HotSpot
+
+
+@dataclass
+class FrameResult:
+    """What one frame produced: the hot spot (if any), the filter state, the fire (if placed) and why not."""
+
+    spot: Optional[HotSpot]
+    confirmed: bool
+    fire: Optional[Fire] = None
+    reason: str = ""
+
+
+class FireDetector:
+    """Threshold -> contours -> centroid, frame filter, then placement from the pose and the laser.
+
+    Args:
+        config: the detector parameters.
+
+    .. note:: a confirmed fire with no usable pose (or, FORWARD, no valid laser range under
+       MAX_LASER_RANGE_FIRE) keeps the filter confirmed (CheckFire says yes) but gives no position.
+    """
+
+    def __init__(self, config: DetectorConfig) -> None:
+        self.config = config
+        self.filter = FrameFilter(config.num_frame_filter, config.false_negative_tolerance)
+
+    @property
+    def fire_detected(self) -> bool:
+        """The CheckFire answer: the frame filter currently believes in a fire."""
+        return self.filter.confirmed
+
+    def process(
+        self,
+        temperatures: Sequence[float],
+        uav_position: Optional[Vec3],
+        uav_yaw: Optional[float],
+        laser_range: Optional[float],
+    ) -> FrameResult:
+        """Processes one raw_temp_array frame; raises ValueError on malformed temperatures."""
+        frame = parse_temperatures(temperatures)
+        spot = find_hot_spot(frame, self.config.thermal_threshold, self.config.min_peak_temperature)
+        confirmed_now = self.filter.update(spot is not None)
+        result = FrameResult(spot=spot, confirmed=self.filter.confirmed)
+        if spot is None:
+            result.reason = "no hot spot"
+            return result
+        if not confirmed_now:
+            result.reason = f"filtering ({self.filter.hot_count}/{self.filter.num_frame_filter + 1} hot frames)"
+            return result
+        if uav_position is None or uav_yaw is None or not all(map(math.isfinite, (*uav_position, uav_yaw))):
+            result.reason = "no valid UAV pose"
+            return result
+        if self.config.camera_direction == C.CAMERA_DIRECTION_FORWARD:
+            if laser_range is None or not math.isfinite(laser_range):
+                result.reason = "no valid front laser range"
+                return result
+            if laser_range >= C.MAX_LASER_RANGE_FIRE:
+                result.reason = f"front laser range {laser_range:.2f} m >= {C.MAX_LASER_RANGE_FIRE} m"
+                return result
+            pos, rel = forward_fire_position(uav_position, uav_yaw, laser_range, spot.u, spot.v)
+            depth = laser_range
+        else:
+            pos, rel = downward_fire_position(uav_position, uav_yaw, spot.u, spot.v)
+            depth = -rel[2]
+        result.fire = Fire(position=pos, relative_position=rel, depth=depth, spot=spot)
+        result.reason = "fire"
+        return result

@@ -1,0 +1,238 @@
+"""Routes around the building and through the virtual elevators (pure numpy-free geometry).
+
+A UAV never changes altitude next to the building except inside its virtual elevator, a vertical column
+at a tower corner; at a fixed altitude it goes around the footprint of whatever part of the building is
+taller than it. This keeps the UAVs separated: each has its own transit altitude and its own elevator.
+"""
+from __future__ import annotations
+
+import heapq
+import math
+from typing import Optional, Sequence
+
+from . import constants as C
+
+Point = tuple[float, float, float]
+Pose = tuple[float, float, float, float]  # x, y, z, yaw
+Rect = tuple[float, float, float, float]  # xmin, ymin, xmax, ymax
+
+EPS = 1e-6
+CORNER_PAD = 0.3  # corner waypoints sit this far outside the inflated rectangle
+
+
+def floor_of(z: float) -> int:
+    """Floor index (0, 1, 2) of an altitude."""
+    for f in range(C.NUM_FLOORS):
+        if z < C.FLOOR_BOUNDS[f + 1]:
+            return f
+    return C.NUM_FLOORS - 1
+
+
+def obstacle_rect(z: float, margin: float, boxes: Sequence = C.BUILDING_BOXES,
+                  clearance: float = 1.0) -> Optional[Rect]:
+    """Footprint (bounding rectangle, inflated by `margin`) of the boxes reaching above z - clearance."""
+    rects = [b for b in boxes if b[5] > z - clearance and b[2] < z + clearance]
+    if not rects:
+        return None
+    return (min(b[0] for b in rects) - margin, min(b[1] for b in rects) - margin,
+            max(b[3] for b in rects) + margin, max(b[4] for b in rects) + margin)
+
+
+def inside(p: Sequence[float], r: Rect, tol: float = EPS) -> bool:
+    """True if the 2D point is strictly inside the rectangle."""
+    return r[0] + tol < p[0] < r[2] - tol and r[1] + tol < p[1] < r[3] - tol
+
+
+def segment_hits_rect(p: Sequence[float], q: Sequence[float], r: Rect) -> bool:
+    """True if the 2D segment p-q passes through the open interior of r (Liang-Barsky clipping)."""
+    t0, t1 = 0.0, 1.0
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    shrink = 1e-4
+    for pk, qk in ((-dx, p[0] - (r[0] + shrink)), (dx, (r[2] - shrink) - p[0]),
+                   (-dy, p[1] - (r[1] + shrink)), (dy, (r[3] - shrink) - p[1])):
+        if abs(pk) < EPS:
+            if qk < 0:
+                return False
+        else:
+            t = qk / pk
+            if pk < 0:
+                t0 = max(t0, t)
+            else:
+                t1 = min(t1, t)
+            if t0 > t1:
+                return False
+    return t1 - t0 > 1e-6
+
+
+def push_out(p: Sequence[float], r: Rect) -> tuple[float, float]:
+    """The nearest 2D point on the border of r (plus a pad) when p is inside r, else p itself."""
+    if not inside(p, r):
+        return (p[0], p[1])
+    d = [p[0] - r[0], r[2] - p[0], p[1] - r[1], r[3] - p[1]]
+    k = d.index(min(d))
+    pad = CORNER_PAD
+    return [(r[0] - pad, p[1]), (r[2] + pad, p[1]), (p[0], r[1] - pad), (p[0], r[3] + pad)][k]
+
+
+def route_2d(p: Sequence[float], q: Sequence[float], r: Optional[Rect]) -> list[tuple[float, float]]:
+    """Intermediate 2D waypoints (corners of r) of the shortest way from p to q around r, ends excluded."""
+    if r is None or not segment_hits_rect(p, q, r):
+        return []
+    corners = [(r[0] - CORNER_PAD, r[1] - CORNER_PAD), (r[2] + CORNER_PAD, r[1] - CORNER_PAD),
+               (r[2] + CORNER_PAD, r[3] + CORNER_PAD), (r[0] - CORNER_PAD, r[3] + CORNER_PAD)]
+    nodes = [tuple(p[:2]), tuple(q[:2])] + corners
+    dist = {0: 0.0}
+    prev: dict[int, int] = {}
+    heap = [(0.0, 0)]
+    while heap:
+        d, i = heapq.heappop(heap)
+        if i == 1:
+            break
+        if d > dist.get(i, math.inf):
+            continue
+        for j in range(len(nodes)):
+            if j == i or segment_hits_rect(nodes[i], nodes[j], r):
+                continue
+            nd = d + math.dist(nodes[i], nodes[j])
+            if nd < dist.get(j, math.inf) - EPS:
+                dist[j] = nd
+                prev[j] = i
+                heapq.heappush(heap, (nd, j))
+    if 1 not in prev:
+        return []
+    out, k = [], prev[1]
+    while k != 0:
+        out.append(nodes[k])
+        k = prev[k]
+    return out[::-1]
+
+
+def level_route(p: Point, q: Point, z: float, margin: float = C.ROUTE_MARGIN) -> list[Point]:
+    """Waypoints from p to q (q included) at altitude z, around the building."""
+    r = obstacle_rect(z, margin)
+    start = p
+    out: list[Point] = []
+    if r is not None and inside(p, r):
+        x, y = push_out(p, r)
+        start = (x, y, z)
+        out.append(start)
+    goal_xy = (q[0], q[1])
+    if r is not None and inside(q, r):
+        goal_xy = push_out(q, r)
+    for x, y in route_2d(start, goal_xy, r):
+        out.append((x, y, z))
+    if goal_xy != (q[0], q[1]):
+        out.append((goal_xy[0], goal_xy[1], z))
+    out.append((q[0], q[1], q[2]))
+    return out
+
+
+def elevator_points(margin: float = C.ELEVATOR_MARGIN) -> list[tuple[float, float]]:
+    """The two virtual elevators: opposite (north-west and south-east) corners of the tower."""
+    t = C.TOWER_BOX
+    return [(t[0] - margin, t[4] + margin), (t[3] + margin, t[1] - margin)]
+
+
+def elevator_box(index: int, z_low: float, z_high: float, half: float = 1.5,
+                 margin: float = C.ELEVATOR_MARGIN) -> tuple[Point, Point]:
+    """Min and max corners of the vertical region of elevator `index` between two altitudes."""
+    x, y = elevator_points(margin)[index % 2]
+    lo, hi = min(z_low, z_high), max(z_low, z_high)
+    return (x - half, y - half, max(0.0, lo - 1.0)), (x + half, y + half, hi + 1.0)
+
+
+def plan_route(start: Point, goal: Point, elevator: int, same_level_tol: float = 0.75) -> list[Point]:
+    """Waypoints from start to goal: around the building at the start altitude to the elevator, vertical
+    inside it, then around the building at the goal altitude. Without altitude change, one level route."""
+    if abs(start[2] - goal[2]) <= same_level_tol:
+        z = max(start[2], goal[2])
+        path = level_route(start, (goal[0], goal[1], z), z)
+        if path[-1][2] != goal[2]:
+            path[-1] = goal
+        return path
+    ex, ey = elevator_points()[elevator % 2]
+    path = level_route(start, (ex, ey, start[2]), start[2])
+    path.append((ex, ey, goal[2]))
+    path += level_route((ex, ey, goal[2]), goal, goal[2])
+    return path
+
+
+def facade_of(holder: Point) -> str:
+    """Facade letter of a holder: A (north wall), C (west wall), D (east wall of the tower)."""
+    t = C.TOWER_BOX
+    if abs(holder[1] - t[4]) < 0.3:
+        return "A"
+    if abs(holder[0] - t[0]) < 0.3:
+        return "C"
+    return "D"
+
+
+def viewpoint(holder: Point, standoff: float = C.FACADE_STANDOFF, min_z: float = 1.0) -> Pose:
+    """Pose `standoff` metres in front of a facade point, looking at it."""
+    x, y, z = holder
+    z = max(z, min_z)
+    face = facade_of(holder)
+    if face == "A":
+        return (x, y + standoff, z, -math.pi / 2)
+    if face == "C":
+        return (x - standoff, y, z, 0.0)
+    return (x + standoff, y, z, math.pi)
+
+
+def _perimeter_key(holder: Point) -> float:
+    """Order along the facades: C south to north, A west to east, D north to south."""
+    face = facade_of(holder)
+    if face == "C":
+        return holder[1]
+    if face == "A":
+        return 100.0 + holder[0]
+    return 200.0 - holder[1]
+
+
+def facade_search_path(floor: int, holders: Sequence[Point] = C.FACADE_HOLDERS,
+                       standoff: float = C.FACADE_STANDOFF, reverse: bool = False) -> list[Pose]:
+    """Viewpoints of every holder of one floor in perimeter order, with corner waypoints between facades."""
+    mine = sorted((h for h in holders if floor_of(h[2]) == floor), key=_perimeter_key, reverse=reverse)
+    path: list[Pose] = []
+    for h in mine:
+        vp = viewpoint(h, standoff)
+        if path:
+            prev = path[-1]
+            z = max(prev[2], vp[2])
+            for x, y, _ in level_route(prev[:3], vp[:3], z, margin=standoff - 0.3)[:-1]:
+                path.append((x, y, z, prev[3]))
+        path.append(vp)
+    return path
+
+
+def ground_search_path(start: Sequence[float], altitude: float = C.GROUND_SEARCH_ALTITUDE,
+                       candidates: Sequence[Point] = C.GROUND_FIRE_CANDIDATES) -> list[Pose]:
+    """Nearest-neighbour tour over the known outdoor fire holders at the search altitude."""
+    left = list(candidates)
+    cur = (start[0], start[1])
+    out: list[Pose] = []
+    while left:
+        nxt = min(left, key=lambda c: math.dist(cur, c[:2]))
+        left.remove(nxt)
+        out.append((nxt[0], nxt[1], altitude, 0.0))
+        cur = nxt[:2]
+    return out
+
+
+def lawnmower_path(area: Sequence[float] = C.GROUND_SEARCH_AREA, spacing: float = C.GROUND_SWEEP_SPACING,
+                   altitude: float = C.GROUND_SEARCH_ALTITUDE) -> list[Pose]:
+    """Back-and-forth sweep over a rectangle (x legs), skipping nothing: used for the second ground search."""
+    xmin, ymin, xmax, ymax = area
+    out: list[Pose] = []
+    n = max(1, int(math.ceil((ymax - ymin) / spacing)))
+    for i in range(n + 1):
+        y = min(ymin + i * spacing, ymax)
+        xs = (xmin, xmax) if i % 2 == 0 else (xmax, xmin)
+        out.append((xs[0], y, altitude, 0.0))
+        out.append((xs[1], y, altitude, 0.0))
+    return out
+
+
+def yaw_towards(p: Sequence[float], q: Sequence[float]) -> float:
+    """Heading from p to q in the xy plane."""
+    return math.atan2(q[1] - p[1], q[0] - p[0])
