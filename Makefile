@@ -2,6 +2,8 @@
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
 #   make test      run every test (pytest unit tests + rostest integration tests)      PKGS="smach ual_sim"
 #   make bench     run the benchmarks, write bench/results/latest.json
+#   make test-faults  fuzz every node, then the mission on network-namespace hosts with link cuts and
+#                  kill -9 (root; a few minutes), report in results/robustness/report.json  SEED= UAVS= RTF=
 SHELL := /bin/bash
 SEED ?= 1
 UAVS ?= 3
@@ -10,7 +12,7 @@ RECORD ?= 0
 SUMMARY ?=
 PKGS ?=
 
-.PHONY: setup build mission test bench lint clean
+.PHONY: setup build mission test test-faults bench lint clean
 setup:
 	@bash setup/setup.sh
 
@@ -21,6 +23,14 @@ mission: setup
 
 test: setup
 	@bash tools/run_tests.sh $(PKGS)
+
+# Separate from `make test`: it runs a whole mission (about 4 minutes at RTF 4 on an idle machine,
+# far longer on a loaded one) and needs root for ip netns.
+test-faults: setup
+	@mkdir -p results/robustness && source env.sh && echo "fuzzing every node (rostest fuzz_project_nodes)" && \
+	  { unshare -n sh -c 'ip link set lo up; exec rostest mbzirc_robustness fuzz_project_nodes.test' \
+	    > results/robustness/fuzz.log 2>&1 || echo "fuzz: FAILED, see results/robustness/fuzz.log"; } && \
+	  rosrun mbzirc_robustness fault_suite --seed $(SEED) --uavs $(UAVS) --rtf $(RTF)
 
 bench: setup
 	@bash tools/run_bench.sh

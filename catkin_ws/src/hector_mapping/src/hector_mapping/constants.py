@@ -42,9 +42,20 @@ NODE_PARAM_DEFAULTS: dict[str, object] = {
 #: exp() never overflows.
 LOG_ODDS_LIMIT = 50.0
 
-#: Gauss-Newton iterations per scan on the coarse levels and on the finest level.
+#: Gauss-Newton iterations per scan on the coarse levels and on the finest level (the original's counts).
 ITERATIONS_COARSE = 4
 ITERATIONS_FINE = 6
+
+#: While a step is still larger than STEP_TOLERANCE (m and rad), iterate up to this many times the
+#: nominal count: the probability field of a grid is flat away from the walls, so Gauss-Newton
+#: converges slowly in rotation after a fast turn and the nominal count stops short of the minimum.
+ITERATION_EXTENSION = 3
+STEP_TOLERANCE = 2e-4
+
+#: Rotation offsets (rad) tried around the initial guess on the coarsest level before Gauss-Newton: a
+#: turn of 0.07 rad between scans (1 rad/s at 15 Hz) moves points 5 m away by several fine cells, outside
+#: the basin of the bilinear field; the best-fitting offset puts the matcher back inside it.
+ROTATION_SEARCH_OFFSETS = (-0.16, -0.12, -0.08, -0.04, 0.0, 0.04, 0.08, 0.12, 0.16)
 
 #: Largest rotation (rad) a single Gauss-Newton step may make: a step larger than this is almost always
 #: the linearisation running away, not the true motion.

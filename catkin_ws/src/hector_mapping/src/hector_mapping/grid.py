@@ -71,7 +71,7 @@ class GridLevel:
         Rays are traced Bresenham-style between cell centres: ``n = max(|di|, |dj|)`` steps along the
         major axis, the minor coordinate rounded, the origin cell included, the end cell excluded from
         the free cells. Beams whose end cell is outside the grid are dropped, and so is everything when
-        the origin is outside. Fully vectorised: no Python loop over beams.
+        the origin is outside. Fully vectorised: no Python loop over beams. Free indices may repeat.
         """
         o = np.rint(self.world_to_map(np.reshape(origin_xy, (1, 2))))[0].astype(np.int64)
         empty = np.zeros(0, np.int64)
@@ -89,14 +89,22 @@ class GridLevel:
         if total == 0:
             return empty, occupied
         nz = n > 0
-        step = np.zeros((d.shape[0], 2), np.float32)
-        step[nz] = d[nz] / n[nz, None]
+        d, n = d[nz], n[nz]
+        # Per beam: a flat-index step along the major axis plus a rounded minor-axis offset. With
+        # x major, cell(t) = o + t * sign(dx) + round(t * dy / n) * size, and symmetrically for y;
+        # the rounding is done in integers (half rounds up) so that it is exact.
+        x_major = np.abs(d[:, 0]) >= np.abs(d[:, 1])
+        major_step = np.where(x_major, np.sign(d[:, 0]), np.sign(d[:, 1]) * self.size)
+        minor_d = np.where(x_major, d[:, 1], d[:, 0])
+        minor_unit = np.where(x_major, self.size, 1)
+        beam = np.repeat(np.arange(n.shape[0]), n)
         # t = 0 .. n_b - 1 for every beam b, laid end to end.
         starts = np.cumsum(n) - n
-        t = (np.arange(total, dtype=np.int64) - np.repeat(starts, n)).astype(np.float32)
-        cx = np.rint(np.repeat(step[:, 0], n) * t).astype(np.int64) + o[0]
-        cy = np.rint(np.repeat(step[:, 1], n) * t).astype(np.int64) + o[1]
-        return cy * self.size + cx, occupied
+        t = np.arange(total, dtype=np.int64) - starts[beam]
+        nb = n[beam]
+        minor = (2 * t * minor_d[beam] + nb) // (2 * nb)
+        free = (o[1] * self.size + o[0]) + t * major_step[beam] + minor * minor_unit[beam]
+        return free, occupied
 
     def update(self, origin_xy: np.ndarray, end_xy: np.ndarray) -> int:
         """Insert one scan: beams from ``origin_xy`` (world, (2,)) to the endpoints ``end_xy`` (N, 2).
@@ -109,17 +117,18 @@ class GridLevel:
         if free.size == 0 and occupied.size == 0:
             return 0
         label = self._label
+        # Label 1 = passed through, 2 = endpoint (written last, so it wins); keep each cell once.
         label[free] = 1
         label[occupied] = 2
         idx = np.concatenate((free, occupied))
         delta = np.where(label[idx] == 2, self.occupied_log_odds, self.free_log_odds)
+        label[idx] = 0
         lo = self.log_odds.reshape(-1)
-        # Duplicated indices all write the same value (old + delta), so each cell changes only once.
+        # Repeated indices all write the same value (old + delta): each cell changes once per scan.
         new = np.clip(lo[idx] + delta, -LOG_ODDS_LIMIT, LOG_ODDS_LIMIT)
         lo[idx] = new
         self.prob.reshape(-1)[idx] = 1.0 / (1.0 + np.exp(-new))
         self.known.reshape(-1)[idx] = True
-        label[idx] = 0
         return int(occupied.size)
 
     # ---- access --------------------------------------------------------------------------------

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
-from .constants import MAX_ROTATION_STEP
+from .constants import ITERATION_EXTENSION, MAX_ROTATION_STEP, STEP_TOLERANCE
 from .geometry import wrap_angle
 from .grid import GridLevel
 
@@ -24,41 +25,69 @@ class MatchResult:
         pose: the estimated pose (x, y, theta).
         hessian: J^T J at the returned pose (world units), the information the scan carries.
         residual: mean of (1 - M)^2 over the points at the returned pose (lower = better fit).
+        iterations: Gauss-Newton steps taken.
     """
 
     pose: np.ndarray
     hessian: np.ndarray
     residual: float
+    iterations: int = 0
+
+
+def _moved(pts: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rotated points (rx, ry) and the points moved by ``pose`` (world)."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    rx = c * pts[:, 0] - s * pts[:, 1]
+    ry = s * pts[:, 0] + c * pts[:, 1]
+    world = np.empty_like(pts)
+    world[:, 0] = rx + pose[0]
+    world[:, 1] = ry + pose[1]
+    return rx, ry, world
+
+
+def residual(level: GridLevel, pts: np.ndarray, pose: np.ndarray) -> float:
+    """Mean of (1 - M)^2 over the scan points at ``pose``."""
+    m, _, _ = level.interpolate(_moved(pts, pose)[2])
+    r = 1.0 - m
+    return float(np.dot(r, r)) / max(len(r), 1)
 
 
 def _linearise(level: GridLevel, pts: np.ndarray, pose: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, float]:
     """H = J^T J, g = J^T r and the mean squared residual at ``pose``."""
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    px, py = pts[:, 0], pts[:, 1]
-    rx = c * px - s * py
-    ry = s * px + c * py
-    world = np.empty_like(pts)
-    world[:, 0] = rx + pose[0]
-    world[:, 1] = ry + pose[1]
+    rx, ry, world = _moved(pts, pose)
     m, gx, gy = level.interpolate(world)
     r = 1.0 - m
-    # d(world)/d(theta) = (-ry, rx)
     jac = np.empty((pts.shape[0], 3))
     jac[:, 0] = gx
     jac[:, 1] = gy
-    jac[:, 2] = gy * rx - gx * ry
+    jac[:, 2] = gy * rx - gx * ry          # grad M . d(world)/d(theta), d(world)/d(theta) = (-ry, rx)
     return jac.T @ jac, jac.T @ r, float(np.dot(r, r)) / max(len(r), 1)
 
 
-def match_level(level: GridLevel, pts: np.ndarray, pose: np.ndarray, iterations: int) -> MatchResult:
+def best_rotation(level: GridLevel, pts: np.ndarray, pose: np.ndarray, offsets: Sequence[float]
+                  ) -> np.ndarray:
+    """``pose`` turned by the offset (from ``offsets``) whose residual is lowest."""
+    best, best_res = np.array(pose, dtype=np.float64), math.inf
+    for off in offsets:
+        cand = np.array([pose[0], pose[1], wrap_angle(pose[2] + off)])
+        res = residual(level, pts, cand)
+        if res < best_res - 1e-12 or (off == 0.0 and res <= best_res):
+            best, best_res = cand, res
+    return best
+
+
+def match_level(level: GridLevel, pts: np.ndarray, pose: np.ndarray, iterations: int,
+                extension: int = ITERATION_EXTENSION) -> MatchResult:
     """Refine ``pose`` so that the scan points ``pts`` (N, 2, in the robot frame) fit ``level``.
 
-    The rotation of a step is clamped to +-MAX_ROTATION_STEP; a singular Hessian (no
-    structure in view) stops the iteration and keeps the current pose.
+    Takes ``iterations`` Gauss-Newton steps, and more (up to ``extension`` times as many) while the step
+    is still larger than STEP_TOLERANCE. The rotation of a step is clamped to +-MAX_ROTATION_STEP; a
+    singular Hessian (no structure in view) stops the iteration and keeps the current pose.
     """
     pose = np.array(pose, dtype=np.float64)
-    for _ in range(iterations):
+    taken = 0
+    for it in range(iterations * max(extension, 1)):
         h, g, _ = _linearise(level, pts, pose)
         if not np.all(np.isfinite(h)) or abs(np.linalg.det(h)) < 1e-12:
             break
@@ -71,5 +100,8 @@ def match_level(level: GridLevel, pts: np.ndarray, pose: np.ndarray, iterations:
         delta[2] = min(max(delta[2], -MAX_ROTATION_STEP), MAX_ROTATION_STEP)
         pose += delta
         pose[2] = wrap_angle(pose[2])
+        taken += 1
+        if it + 1 >= iterations and np.max(np.abs(delta)) < STEP_TOLERANCE:
+            break
     h, _, res = _linearise(level, pts, pose)
-    return MatchResult(pose, h, res)
+    return MatchResult(pose, h, res, taken)

@@ -48,20 +48,28 @@ UAL_LANDING = 6
 
 # ---- world (c3_world.md); every one of these is also a ~param of the nodes that use it ---------------
 GLOBAL_FRAME = 'arena'
-# Arena box (x_min, y_min, z_min, x_max, y_max, z_max): 60 m x 50 m x 20 m around the building.
-ARENA_BOX = (-25.0, -15.0, 0.0, 35.0 + 5.0, 35.0, 20.0)
+# Arena box (x_min, y_min, z_min, x_max, y_max, z_max): 60 m x 50 m x 20 m (ual_sim c3_default world).
+ARENA_BOX = (-17.0, -13.0, 0.0, 43.0, 37.0, 20.0)
 # Building footprints (x_min, y_min, x_max, y_max, height).
 TOWER = (11.4, 6.7, 24.2, 19.5, 18.0)
 EXTENSION = (24.2, 6.7, 37.0, 19.5, 4.5)
 BUILDINGS = [TOWER, EXTENSION]
-# Floors: z range of each floor's facade holders / rooms (0 ground, 1 first, 2 second).
-FLOOR_Z = [(0.0, 4.5), (5.5, 9.5), (10.0, 14.5)]
+# Floors: z range of each floor (0 ground, 1 first, 2 second); a fire's floor is the range holding its z.
+FLOOR_Z = [(0.0, 5.0), (5.0, 10.0), (10.0, 15.0)]
 FACADE_HOLDERS = [
     (12.4, 19.5, 6.5), (12.4, 19.5, 12.75), (17.4, 19.5, 10.5), (22.7, 19.5, 12.75), (23.7, 19.5, 0.75),
     (11.4, 8.5, 6.0), (11.4, 18.5, 2.75), (11.4, 18.5, 10.25), (11.4, 14.5, 10.5), (11.4, 8.5, 12.5),
     (24.2, 17.75, 6.0), (24.2, 12.7, 10.5), (24.2, 8.2, 12.5), (24.2, 18.8, 12.5), (24.2, 8.2, 8.25),
 ]
 OUTDOOR_FIRE_HOLDERS = [(-9.0, 20.0, 0.0), (1.0, 14.0, 0.0)]
+# Default outdoor area searched for ground fires (x_min, y_min, x_max, y_max): around the holders.
+GROUND_SEARCH_AREA = (-12.0, 6.0, 7.0, 30.0)
+# UGV: the ground-floor door (facade B, x 13-15.5 at y = 6.7), a pose outside it and a search path inside.
+UGV_DOOR_OUTSIDE = (14.25, 4.0)
+UGV_DOOR_INSIDE = (14.25, 9.0)
+# Viewpoints ~5 m from the ground-floor indoor holders (17.7, 8.5) and (17.9, 16.5): the UGV's level thermal
+# camera (at ground height in ual_sim) only sees a fire 1.5 m up from about 5 m away.
+UGV_INDOOR_PATH = [(14.25, 9.0), (12.4, 8.5), (16.5, 11.0), (19.5, 11.0), (23.0, 16.5)]
 
 # ---- agent defaults ---------------------------------------------------------------------------------
 CONTROL_RATE_HZ = 10.0          # every control / monitoring loop of a task
@@ -72,6 +80,6 @@ RETURN_HOME_TIMEOUT = 60.0
 REGION_MARGIN = 1.0             # m added around every reserved box
 REGION_WAIT_TIMEOUT = 60.0      # s a go-to waits for its region before giving up
 HOLD_HALF_SIZE = 1.0            # half side of the box held around a hovering UAV
-POSITION_TOLERANCE = 0.3        # m, a go-to has arrived
+POSITION_TOLERANCE = 0.2        # m, a go-to has arrived (the UAL stops within 0.1 m)
 YAW_TOLERANCE = 0.15            # rad
 FACADE_STANDOFF = 2.0           # m in front of a facade fire holder

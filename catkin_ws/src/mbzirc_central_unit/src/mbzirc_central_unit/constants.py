@@ -92,12 +92,12 @@ FACADE_STANDOFF = 2.5           # m from the wall when searching a facade (therm
 ROUTE_MARGIN = 2.5              # m kept from the building when routing around it
 ELEVATOR_MARGIN = 6.0           # m from the tower corners to the virtual elevators
 FIRE_DISTANCE = 1.5             # m from the hole for go_to_facade_fire
-MIN_WATER = 0.05                # litres: below this the tank counts as empty
+MIN_WATER = 0.8                 # litres: below this a water UAV refills first (a fire takes about 1 L)
 GROUND_SEARCH_ALTITUDE = 3.0
 GROUND_SWEEP_SPACING = 4.0
 MISSION_DURATION = 1200.0       # s, 20 minutes
 MAX_TASK_FAILURES = 3           # failures of one task kind on one target before giving it up
 # Transit altitude per UAV id: each UAV flies outside the building at its own altitude.
-DEFAULT_ALTITUDES = {"1": 3.0, "2": 5.0, "3": 7.0}
+DEFAULT_ALTITUDES = {"1": 3.0, "2": 5.5, "3": 8.0}
 ALTITUDE_BASE = 3.0
-ALTITUDE_STEP = 2.0
+ALTITUDE_STEP = 2.5

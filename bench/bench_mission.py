@@ -1,0 +1,86 @@
+#!/usr/bin/env python3
+"""Benchmark of complete simulated Challenge 3 trials over several seeds (tools/run_mission.sh each).
+
+Prints and writes bench/results/mission.json: share of seeds with all 8 fires out within the 20 simulated
+minutes, mean time to put out every fire, mean score, crashes, real-time factor reached (sim time / wall
+time of the same run). Long: about 20/RTF minutes per seed.
+    python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
+The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
+    out = os.path.join(out_root, f"seed_{seed}")
+    cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
+           f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1"]
+    t0 = time.time()
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    wall = time.time() - t0
+    path = os.path.join(out, "summary.json")
+    if not os.path.exists(path):
+        return {"seed": seed, "error": (proc.stdout + proc.stderr)[-800:], "wall_total_s": wall}
+    with open(path, encoding="utf-8") as f:
+        s = json.load(f)
+    s["wall_total_s"] = round(wall, 1)
+    return s
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=int(os.environ.get("MISSION_BENCH_SEEDS", "10")))
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--rtf", type=float, default=4.0)
+    ap.add_argument("--uavs", type=int, default=3)
+    ap.add_argument("--duration", type=float, default=1200.0)
+    args = ap.parse_args()
+    out_root = os.path.join(ROOT, "bench", "results", "mission_runs")
+    runs = []
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        s = run_seed(seed, args, out_root)
+        runs.append(s)
+        if "error" in s:
+            print(f"seed {seed}: FAILED to run: {s['error'][-300:]}", flush=True)
+        else:
+            print(f"seed {seed}: {s['fires_extinguished']}/{s['fires_total']} out, score {s['score']}, "
+                  f"all out at {s.get('all_out_time_s')} s, crashes {s['crashes'] or 'none'}, "
+                  f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
+    ok = [r for r in runs if "error" not in r]
+    all_out = [r for r in ok if r["fires_total"] == 8 and r["fires_extinguished"] == 8]
+    res = {
+        "seeds": [r["seed"] for r in runs],
+        "runs_completed": len(ok),
+        "uavs": args.uavs, "rtf_requested": args.rtf, "duration_s": args.duration,
+        "all_fires_out_ratio": round(len(all_out) / len(runs), 3) if runs else None,
+        "mean_time_all_out_s": round(statistics.mean(r["all_out_time_s"] for r in all_out), 1) if all_out else None,
+        "mean_fires_extinguished": round(statistics.mean(r["fires_extinguished"] for r in ok), 2) if ok else None,
+        "mean_score": round(statistics.mean(r["score"] for r in ok), 3) if ok else None,
+        "runs_with_crash": sum(1 for r in ok if r["crashes"]),
+        "min_separation_m": min((r["min_separation_m"] for r in ok if r.get("min_separation_m") is not None),
+                                default=None),
+        "mean_real_time_factor": round(statistics.mean(r["real_time_factor"] for r in ok
+                                                       if r.get("real_time_factor")), 2) if ok else None,
+        "mean_wall_per_trial_s": round(statistics.mean(r["wall_total_s"] for r in runs), 1) if runs else None,
+        "per_seed": [{k: r.get(k) for k in ("seed", "fires_extinguished", "fires_total", "score",
+                                            "all_out_time_s", "crashes", "real_time_factor", "end_reason",
+                                            "min_separation_m", "error")} for r in runs],
+    }
+    print(json.dumps({k: v for k, v in res.items() if k != "per_seed"}, indent=2))
+    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
+    with open(os.path.join(ROOT, "bench", "results", "mission.json"), "w", encoding="utf-8") as f:
+        json.dump(res, f, indent=2)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""rostest: hector_mapping on the replayed fast-turning flight, against the simulator's ground truth.
+
+Checks the trajectory (every slam_out_pose against the true pose of the same stamp, the map frame being
+the true start pose), the final pose, TF map -> base_link, the map's walls against the world's wall
+surfaces, the pose covariance, and then the pause_mapping / reset_map services.
+"""
+import json
+import math
+import sys
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.srv import GetMap
+from scipy.spatial import cKDTree
+from std_srvs.srv import SetBool, Trigger
+
+NS = "mbzirc2020_1"
+
+
+def yaw_of(q):
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+class ReplayTest(unittest.TestCase):
+    """One replay of the recording; the checks share it."""
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_hector_replay")
+        with open(rospy.get_param("~meta")) as f:
+            cls.meta = json.load(f)
+        cls.est = {}
+        cls.truth = {}
+        cls.cov = []
+        rospy.Subscriber("slam_out_pose", PoseStamped, cls._on_pose, queue_size=100)
+        rospy.Subscriber("ground_truth/pose", PoseStamped, cls._on_truth, queue_size=100)
+        rospy.Subscriber("poseupdate", PoseWithCovarianceStamped,
+                         lambda m: cls.cov.append(np.array(m.pose.covariance).reshape(6, 6)), queue_size=100)
+        cls.tf_buffer = tf2_ros.Buffer()
+        cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
+        end = 1000.0 + cls.meta["duration"]
+        deadline = time.time() + 75.0
+        # Wait until the last scan's estimate arrived (or the bag ended and nothing came for a while).
+        last_count, quiet_since = -1, time.time()
+        while time.time() < deadline and not rospy.is_shutdown():
+            if cls.est and max(cls.est) >= end - 1e-3:
+                break
+            if len(cls.est) != last_count:
+                last_count, quiet_since = len(cls.est), time.time()
+            elif cls.truth and max(cls.truth) >= end - 1e-3 and time.time() - quiet_since > 5.0:
+                break
+            time.sleep(0.2)
+        cls.tf_final = None
+        try:
+            cls.tf_final = cls.tf_buffer.lookup_transform("map", f"{NS}/base_link", rospy.Time(0),
+                                                          rospy.Duration(2.0))
+        except Exception as e:  # noqa: BLE001 - any failure here is reported by test_3
+            cls.tf_error = f"no TF map -> {NS}/base_link: {e!r}"
+
+    @classmethod
+    def _on_pose(cls, m):
+        cls.est[round(m.header.stamp.to_sec(), 3)] = (m.pose.position.x, m.pose.position.y,
+                                                      yaw_of(m.pose.orientation))
+
+    @classmethod
+    def _on_truth(cls, m):
+        cls.truth[round(m.header.stamp.to_sec(), 3)] = (m.pose.position.x, m.pose.position.y,
+                                                        yaw_of(m.pose.orientation))
+
+    def to_map(self, xy):
+        """Arena points -> the SLAM map frame (whose origin is the true start pose)."""
+        x0, y0, th = self.meta["start_pose"]
+        c, s = math.cos(th), math.sin(th)
+        d = np.asarray(xy, float) - [x0, y0]
+        return np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)
+
+    def pairs(self):
+        stamps = sorted(set(self.est) & set(self.truth))
+        est = np.array([self.est[t] for t in stamps])
+        gt = np.array([self.truth[t] for t in stamps])
+        gt_map = self.to_map(gt[:, :2])
+        gt_yaw = gt[:, 2] - self.meta["start_pose"][2]
+        return stamps, est, gt_map, gt_yaw
+
+    def test_1_most_scans_processed(self):
+        self.assertGreater(len(self.est), 0.8 * self.meta["n_scans"],
+                           f"only {len(self.est)} of {self.meta['n_scans']} scans gave a pose")
+
+    def test_2_trajectory_error(self):
+        stamps, est, gt_map, gt_yaw = self.pairs()
+        self.assertGreater(len(stamps), 100)
+        err = np.linalg.norm(est[:, :2] - gt_map, axis=1)
+        yaw_err = np.abs([wrap(a - b) for a, b in zip(est[:, 2], gt_yaw)])
+        rms = float(np.sqrt(np.mean(err ** 2)))
+        rospy.loginfo(f"replay: {len(stamps)} poses, position error rms {rms:.4f} max {err.max():.4f} m, "
+                      f"yaw error max {yaw_err.max():.4f} rad")
+        self.assertLess(rms, 0.05)
+        self.assertLess(err.max(), 0.10)
+        self.assertLess(yaw_err.max(), 0.03)
+
+    def test_3_final_pose_and_tf(self):
+        stamps, est, gt_map, gt_yaw = self.pairs()
+        self.assertGreaterEqual(stamps[-1], 1000.0 + self.meta["duration"] - 0.5,
+                                "the last scans were not processed")
+        self.assertLess(np.linalg.norm(est[-1, :2] - gt_map[-1]), 0.05)
+        self.assertLess(abs(wrap(est[-1, 2] - gt_yaw[-1])), 0.02)
+        self.assertIsNotNone(self.tf_final, getattr(self, "tf_error", "no TF map -> base_link"))
+        t = self.tf_final.transform.translation
+        self.assertLess(math.hypot(t.x - est[-1, 0], t.y - est[-1, 1]), 0.05)
+
+    def test_4_covariance(self):
+        self.assertTrue(self.cov)
+        c = self.cov[-1]
+        sub = c[np.ix_([0, 1, 5], [0, 1, 5])]
+        self.assertTrue(np.allclose(sub, sub.T))
+        self.assertTrue(np.all(np.linalg.eigvalsh(sub) > 0))
+        self.assertLess(sub[0, 0], 0.01)
+
+    def test_5_map_walls_within_one_cell(self):
+        rospy.wait_for_service("dynamic_map", 10.0)
+        grid = rospy.ServiceProxy("dynamic_map", GetMap)().map
+        res = grid.info.resolution
+        self.assertAlmostEqual(res, 0.05, places=6)
+        self.assertEqual((grid.info.width, grid.info.height), (2048, 2048))
+        data = np.asarray(grid.data, np.int8).reshape(grid.info.height, grid.info.width)
+        occ = np.argwhere(data == 100)                     # (row = iy, col = ix)
+        self.assertGreater(len(occ), 500)
+        self.assertGreater(np.count_nonzero(data == 0), 10 * len(occ))
+        ox, oy = grid.info.origin.position.x, grid.info.origin.position.y
+        walls = self.to_map(np.array(self.meta["wall_points"]))
+        wall_cells = np.stack([(walls[:, 0] - ox) / res - 0.5, (walls[:, 1] - oy) / res - 0.5], axis=1)
+        occ_xy = occ[:, ::-1].astype(float)
+        # Every seen wall point has an occupied cell within one cell (Chebyshev, + rounding).
+        d_wall, _ = cKDTree(occ_xy).query(wall_cells, p=np.inf)
+        frac_walls = float(np.mean(d_wall <= 1.5))
+        # And the occupied cells lie on the walls: within one cell of a true wall point.
+        d_occ, _ = cKDTree(wall_cells).query(occ_xy, p=np.inf)
+        frac_occ = float(np.mean(d_occ <= 1.5))
+        rospy.loginfo(f"replay map: {len(occ)} occupied cells, {frac_walls:.3f} of wall points covered, "
+                      f"{frac_occ:.3f} of occupied cells on walls")
+        self.assertGreater(frac_walls, 0.95)
+        self.assertGreater(frac_occ, 0.95)
+
+    def test_6_pause_and_reset_services(self):
+        pause = rospy.ServiceProxy("pause_mapping", SetBool)
+        self.assertTrue(pause(True).success)
+        self.assertTrue(pause(False).success)
+        reset = rospy.ServiceProxy("reset_map", Trigger)
+        self.assertTrue(reset().success)
+        grid = rospy.ServiceProxy("dynamic_map", GetMap)().map
+        self.assertTrue(np.all(np.asarray(grid.data, np.int8) == -1))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("hector_mapping", "test_replay", ReplayTest, sys.argv)

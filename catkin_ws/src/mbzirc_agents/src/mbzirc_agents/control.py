@@ -1,0 +1,127 @@
+"""Pure controllers of the tasks: centring a hole at the nozzle, centring a ground fire under the UAV.
+
+Why pure: the loops run at a fixed rate in the tasks; their maths (frames, gains, saturation, when
+"centred" holds) is tested here without a simulator.
+Frames: body = base_link (x forward, y left, z up); world = arena. Velocities are returned in the world
+frame, as `ual/set_velocity` takes them.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+
+def body_to_world(v_body: Sequence[float], yaw: float) -> np.ndarray:
+    """Rotate a body-frame vector into the world frame (yaw only: the UAV flies level)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    x, y, z = v_body
+    return np.array([c * x - s * y, s * x + c * y, z])
+
+
+def world_to_body(v_world: Sequence[float], yaw: float) -> np.ndarray:
+    """Inverse of body_to_world."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    x, y, z = v_world
+    return np.array([c * x + s * y, -s * x + c * y, z])
+
+
+def saturate(v: np.ndarray, vmax: float) -> np.ndarray:
+    """v scaled down so that its norm is at most vmax."""
+    n = float(np.linalg.norm(v))
+    return v if n <= vmax or n == 0 else v * (vmax / n)
+
+
+@dataclass
+class HoleCentering:
+    """P controller that brings a hole (body frame position) in front of the nozzle.
+
+    Args:
+        shoot_distance: wanted distance (m, along body x) from the UAV centre to the hole.
+        nozzle_offset: (y, z) of the water jet's aim in the body frame at that distance.
+        gain: 1/s; vmax: m/s; tolerance: m of lateral/vertical error that counts as centred;
+        depth_tolerance: m of error along x that counts as centred.
+    """
+    shoot_distance: float = 1.5
+    nozzle_offset: Tuple[float, float] = (0.0, 0.0)
+    gain: float = 0.8
+    vmax: float = 0.5
+    tolerance: float = 0.15
+    depth_tolerance: float = 0.4
+
+    def error(self, hole_body: Sequence[float]) -> np.ndarray:
+        """Body-frame error (how far the UAV must move) to put the hole at the aim point."""
+        return np.array([hole_body[0] - self.shoot_distance, hole_body[1] - self.nozzle_offset[0],
+                         hole_body[2] - self.nozzle_offset[1]])
+
+    def centred(self, hole_body: Sequence[float]) -> bool:
+        """True when the jet would hit the hole."""
+        e = self.error(hole_body)
+        return abs(e[1]) <= self.tolerance and abs(e[2]) <= self.tolerance and abs(e[0]) <= self.depth_tolerance
+
+    def velocity(self, hole_body: Sequence[float], yaw: float) -> np.ndarray:
+        """World-frame velocity command that reduces the error."""
+        return body_to_world(saturate(self.gain * self.error(hole_body), self.vmax), yaw)
+
+
+def thermal_pixel_to_ground(u: float, v: float, height: float, width_px: int = 32, height_px: int = 32,
+                            fov_deg: float = 33.0) -> np.ndarray:
+    """Body-frame (x, y) offset on the ground of pixel (u, v) of the DOWNWARD thermal camera.
+
+    Image top = UAV front, image right = UAV right (-y). `height` is the camera's height above ground.
+    """
+    f = (width_px / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
+    du = (u - (width_px - 1) / 2.0) / f
+    dv = (v - (height_px - 1) / 2.0) / f
+    return np.array([-dv * height, -du * height])
+
+
+@dataclass
+class GroundFireCentering:
+    """Centre a ground fire under the UAV while descending to a release height.
+
+    Horizontal: P on the world xy error; vertical: descend at `descent_speed` only while the horizontal
+    error is under `descend_tolerance`, so the UAV never drops off-target.
+    """
+    release_height: float = 1.5
+    gain: float = 0.8
+    vmax: float = 0.6
+    descent_speed: float = 0.4
+    tolerance: float = 0.25
+    descend_tolerance: float = 0.6
+
+    def velocity(self, uav: Sequence[float], fire_xy: Sequence[float], ground_z: float = 0.0) -> np.ndarray:
+        """World velocity toward being over fire_xy at release height."""
+        exy = np.array([fire_xy[0] - uav[0], fire_xy[1] - uav[1]])
+        vxy = saturate(self.gain * exy, self.vmax)
+        dz = (ground_z + self.release_height) - uav[2]
+        if np.linalg.norm(exy) <= self.descend_tolerance:
+            vz = float(np.clip(self.gain * dz, -self.descent_speed, self.descent_speed))
+        else:
+            vz = float(np.clip(self.gain * dz, 0.0, self.descent_speed))   # may climb, never descend
+        return np.array([vxy[0], vxy[1], vz])
+
+    def ready(self, uav: Sequence[float], fire_xy: Sequence[float], ground_z: float = 0.0) -> bool:
+        """True when over the fire within tolerance and at release height (+-0.3 m)."""
+        exy = math.hypot(fire_xy[0] - uav[0], fire_xy[1] - uav[1])
+        return exy <= self.tolerance and abs(uav[2] - (ground_z + self.release_height)) <= 0.3
+
+
+def yaw_rate_to(current_yaw: float, target_yaw: float, gain: float = 1.0, max_rate: float = 0.8) -> float:
+    """Yaw rate (rad/s) that turns toward target_yaw the short way."""
+    e = math.atan2(math.sin(target_yaw - current_yaw), math.cos(target_yaw - current_yaw))
+    return float(np.clip(gain * e, -max_rate, max_rate))
+
+
+def pick_hole(holes_body: Sequence[Sequence[float]]) -> Optional[np.ndarray]:
+    """The hole to aim at among detected circles: the middle one of a row of three, else the nearest
+    to the image centre line (smallest |y|, |z|). Used when the circle detector sends every circle."""
+    if not holes_body:
+        return None
+    pts = np.asarray(holes_body, dtype=float)
+    if len(pts) >= 3:
+        order = np.argsort(pts[:, 1])
+        return pts[order[len(order) // 2]]
+    return pts[np.argmin(np.hypot(pts[:, 1], pts[:, 2]))]

@@ -1,0 +1,391 @@
+"""RobotAgent: what the UAV and UGV agents share on top of the framework.
+
+It senses (UAL pose and state, water level, blanket, `/estimated_objects`, the central unit's heartbeat),
+publishes `data_feed` at 10 Hz, serves `get_cost_to_go_to`, runs the heartbeat watchdog, and gives the
+tasks their motion and payload primitives (fly/drive to a pose with monitoring, reserve regions, pump).
+Agents never read `/sim/*`: everything comes from the robot's own interfaces.
+"""
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any, Dict, Optional, Sequence
+
+import numpy as np
+from geometry_msgs.msg import PointStamped, PoseStamped, TwistStamped
+from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
+from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, CheckFire, FreeRegions,
+                                  FreeRegionsRequest, GetCostToGoTo, GetCostToGoToResponse, SetObjectStatus,
+                                  SetObjectStatusRequest)
+from std_msgs.msg import Bool, Float32, Header
+from std_srvs.srv import Trigger
+from uav_abstraction_layer.msg import State
+from uav_abstraction_layer.srv import GoToWaypoint, GoToWaypointRequest
+
+from . import constants as C
+from . import heartbeat as hb
+from .framework import Agent, AgentTask, TaskError, TaskPreempted
+from .geometry import check_point, quaternion_from_yaw, wrap_angle, yaw_from_quaternion
+
+# Every ~param of an agent with its default (the README lists them).
+DEFAULT_PARAMS: Dict[str, Any] = {
+    'uav_id': '1',
+    'payload': 'water',
+    'central_unit_timeout': C.CENTRAL_UNIT_TIMEOUT,
+    'return_home_timeout': C.RETURN_HOME_TIMEOUT,
+    'arena': list(C.ARENA_BOX),
+    'region_margin': C.REGION_MARGIN,
+    'region_timeout': C.REGION_WAIT_TIMEOUT,
+    'hold_half_size': C.HOLD_HALF_SIZE,
+    'use_regions': True,
+    'position_tolerance': C.POSITION_TOLERANCE,
+    'yaw_tolerance': C.YAW_TOLERANCE,
+    'max_speed': 1.6,
+    'max_vertical_speed': 1.2,
+    'tank_capacity': 2.0,
+    'water_empty': 0.05,
+    'cruise_altitude': 0.0,            # 0: go home at the current altitude
+    'refill_timeout': 60.0,
+    'facade_standoff': C.FACADE_STANDOFF,
+    'shoot_distance': 1.5,
+    'check_fire_time': 4.0,
+    'confirm_time': 6.0,
+    'centering_timeout': 30.0,
+    'extinguish_timeout': 60.0,
+    'stop_at_first_fire': True,
+    'ground_search_area': list(C.GROUND_SEARCH_AREA),
+    'ground_search_height': 4.0,
+    'ground_search_spacing': 3.0,
+    'blanket_release_height': 1.5,
+    'entry_depth': 2.5,
+    'indoor_fire_distance': 1.5,
+    'building_clearance': 1.5,
+    'home': [],                        # [x, y, z]; empty: the first pose received
+}
+
+
+class RobotAgent(Agent):
+    """Base of UavAgent and UgvAgent. `params` holds the node's ~params (see DEFAULT_PARAMS)."""
+    ROBOT_TYPE = 'uav'
+
+    def __init__(self, agent_id: str, backend: Any, params: Dict[str, Any], namespace: str = '') -> None:
+        super().__init__(agent_id, backend, namespace)
+        self.p = dict(DEFAULT_PARAMS)
+        self.p.update(params)
+        self.arena = [float(v) for v in self.p['arena']]
+        self.state_lock = threading.Lock()
+        self.pose: Optional[np.ndarray] = None          # x, y, z, yaw
+        self.pose_msg: Optional[PoseStamped] = None
+        self.ual_state = C.UAL_UNINITIALIZED
+        self.water_level = float('nan')
+        self.blanket_attached = False
+        self.objects: Dict[int, Any] = {}
+        self.home: Optional[np.ndarray] = np.array(self.p['home'], float) if len(self.p['home']) == 3 else None
+        self.pumping = False
+        self.watchdog = hb.HeartbeatWatchdog(float(self.p['central_unit_timeout']),
+                                             float(self.p['return_home_timeout']))
+        self._went_home = False
+        self._home_request = None
+        ifc = self.iface
+        ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
+        ifc.add_subscriber(None, 'ual/state', State, self._on_state)
+        ifc.add_subscriber(None, 'actuators_system/water_level', Float32, self._on_water)
+        ifc.add_subscriber(None, 'actuators_system/blanket_attached', Bool, self._on_blanket)
+        ifc.add_subscriber(None, '/estimated_objects', ObjectList, self._on_objects)
+        ifc.add_subscriber(None, C.HEARTBEAT_TOPIC, Header, self._on_heartbeat)
+        self.feed_pub = ifc.add_publisher('data_feed', AgentDataFeed)
+        self.vel_pub = ifc.add_publisher('ual/set_velocity', TwistStamped)
+        self.go_to_srv = ifc.add_client('ual/go_to_waypoint', GoToWaypoint)
+        self.ask_srv = ifc.add_client('/ask_for_region', AskForRegion)
+        self.free_srv = ifc.add_client('/free_regions', FreeRegions)
+        self.status_srv = ifc.add_client('/set_object_status', SetObjectStatus)
+        self.check_fire_srv = ifc.add_client('thermal_detection/fire_detected', CheckFire)
+        self.pump_start_srv = ifc.add_client('actuators_system/start_pump', Trigger)
+        self.pump_stop_srv = ifc.add_client('actuators_system/stop_pump', Trigger)
+        ifc.add_service_server(None, 'get_cost_to_go_to', GetCostToGoTo, default_callback=self._on_cost)
+        self.timer = backend.timer(1.0 / C.DATA_FEED_RATE_HZ, self._on_timer)
+
+    # ---- sensing callbacks (always on) ------------------------------------------------------------
+    def _on_pose(self, msg: PoseStamped) -> None:
+        p, q = msg.pose.position, msg.pose.orientation
+        yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
+        vals = (p.x, p.y, p.z)
+        if yaw is None or not all(map(math.isfinite, vals)):
+            self.backend.logerr_throttle(5.0, 'ual/pose: NaN or invalid orientation, ignored')
+            return
+        with self.state_lock:
+            self.pose = np.array([p.x, p.y, p.z, yaw])
+            self.pose_msg = msg
+            if self.home is None:
+                self.home = np.array([p.x, p.y, p.z])
+
+    def _on_state(self, msg: State) -> None:
+        self.ual_state = int(msg.state)
+
+    def _on_water(self, msg: Float32) -> None:
+        self.water_level = float(msg.data)
+
+    def _on_blanket(self, msg: Bool) -> None:
+        self.blanket_attached = bool(msg.data)
+
+    def _on_objects(self, msg: ObjectList) -> None:
+        with self.state_lock:
+            self.objects = {int(o.id): o for o in msg.objects}
+
+    def _on_heartbeat(self, _msg: Header) -> None:
+        self.watchdog.beat(self.backend.now())
+
+    # ---- data feed + heartbeat watchdog -----------------------------------------------------------
+    def _on_timer(self, _event: Any = None) -> None:
+        self._watch_heartbeat()
+        self.feed_pub.publish(self.data_feed())
+
+    def data_feed(self) -> AgentDataFeed:
+        """The agent's state for the central unit (and its heartbeat)."""
+        msg = AgentDataFeed()
+        msg.header.stamp = self._stamp()
+        msg.header.frame_id = C.GLOBAL_FRAME
+        msg.agent_id = self.agent_id
+        msg.robot_type = self.ROBOT_TYPE
+        msg.payload = str(self.p['payload'])
+        with self.state_lock:
+            if self.pose_msg is not None:
+                msg.pose = self.pose_msg
+        msg.ual_state = self.ual_state
+        msg.active_task = self.running_task()
+        msg.active_sub_state = self.active_sub_state
+        msg.is_idle = not msg.active_task
+        msg.battery = 1.0                    # no battery model in the simulation
+        msg.water_level = self.water_level if math.isfinite(self.water_level) else 0.0
+        msg.has_blanket = self.blanket_attached
+        return msg
+
+    def _stamp(self) -> Any:
+        import rospy
+        return rospy.Time.from_sec(self.backend.now())
+
+    def _watch_heartbeat(self) -> None:
+        state = self.watchdog.state(self.backend.now())
+        if state == hb.OK:
+            if not self.accepting:
+                self.backend.logwarn('central unit heartbeat back: accepting goals again')
+                self.accepting, self.reject_reason = True, ''
+                if self._home_request is not None and not self._home_request.done.is_set():
+                    self.preempt_running('central unit heartbeat back')
+                self._went_home, self._home_request = False, None
+            return
+        if self.accepting:
+            self.backend.logwarn('central unit heartbeat lost: stopping the task safely')
+            self.accepting, self.reject_reason = False, 'central unit heartbeat lost'
+            self.preempt_running('central unit heartbeat lost')
+        if state == hb.RETURN_HOME and not self._went_home and not self.running_task():
+            self._went_home = True
+            self._home_request = self.return_home()
+
+    def return_home(self) -> Any:
+        """Start going home after a long heartbeat loss (UAV: go home and land); None if nothing to do."""
+        return None
+
+    # ---- state accessors for tasks ------------------------------------------------------------------
+    def position(self) -> np.ndarray:
+        """Current x, y, z, yaw; TaskError when no pose has arrived."""
+        with self.state_lock:
+            if self.pose is None:
+                raise TaskError('no pose received on ual/pose')
+            return self.pose.copy()
+
+    def fire(self, fire_id: int) -> Any:
+        """The estimated object with this id (an mbzirc_comm_objs/Object); ValueError when unknown."""
+        with self.state_lock:
+            obj = self.objects.get(int(fire_id))
+        if obj is None or obj.type != C.TYPE_FIRE:
+            raise ValueError(f'unknown fire id {fire_id} (not in /estimated_objects)')
+        return obj
+
+    def fires(self, sub_types: Sequence[int] = (), statuses: Sequence[int] = (C.STATUS_ACTIVE,)) -> list:
+        """Estimated fires of the given sub-types (all when empty) and statuses."""
+        with self.state_lock:
+            objs = list(self.objects.values())
+        return [o for o in objs if o.type == C.TYPE_FIRE and (not sub_types or o.sub_type in sub_types)
+                and o.status in statuses]
+
+    def check_point(self, p: Sequence[float], what: str = 'waypoint') -> None:
+        """ValueError when p is NaN or outside the arena."""
+        err = check_point(p, self.arena, what)
+        if err:
+            raise ValueError(err)
+
+    # ---- motion primitives ----------------------------------------------------------------------------
+    def send_waypoint(self, x: float, y: float, z: float, yaw: float) -> None:
+        """ual/go_to_waypoint, not blocking; TaskError when refused."""
+        req = GoToWaypointRequest()
+        req.waypoint.header.frame_id = C.GLOBAL_FRAME
+        req.waypoint.header.stamp = self._stamp()
+        req.waypoint.pose.position.x, req.waypoint.pose.position.y, req.waypoint.pose.position.z = x, y, z
+        q = quaternion_from_yaw(yaw)
+        o = req.waypoint.pose.orientation
+        o.x, o.y, o.z, o.w = q
+        req.blocking = False
+        try:
+            self.go_to_srv(req)
+        except Exception as e:
+            raise TaskError(f'ual/go_to_waypoint failed: {e}')
+
+    def move_to(self, task: AgentTask, target: Sequence[float], yaw: Optional[float], what: str,
+                tolerance: Optional[float] = None, stop_when: Optional[Any] = None) -> bool:
+        """Send a waypoint and watch the pose at the control rate until there (or TaskError on timeout).
+
+        On preemption the robot is stopped where it is (hold) before TaskPreempted propagates. When
+        stop_when() turns true on the way, the robot holds there and False is returned (True: arrived).
+        """
+        cur = self.position()
+        yaw = cur[3] if yaw is None else yaw
+        tol = float(self.p['position_tolerance']) if tolerance is None else tolerance
+        dist = float(np.linalg.norm(np.asarray(target[:3]) - cur[:3]))
+        timeout = dist / max(0.2, 0.5 * float(self.p['max_speed'])) + 20.0
+        self.send_waypoint(target[0], target[1], target[2], yaw)
+        end = self.backend.now() + timeout
+        try:
+            while True:
+                task.check_preempt()
+                p = self.position()
+                dxy = math.hypot(target[0] - p[0], target[1] - p[1])
+                dz = abs(target[2] - p[2]) if self.ROBOT_TYPE == 'uav' else 0.0
+                if dxy <= tol and dz <= tol and abs(wrap_angle(yaw - p[3])) <= float(self.p['yaw_tolerance']):
+                    return True
+                if stop_when is not None and stop_when():
+                    self.hold()
+                    return False
+                if self.backend.now() > end:
+                    raise TaskError(f'{what}: not there after {timeout:.0f} s ({dxy:.1f} m left)')
+                if self.ual_state == C.UAL_UNINITIALIZED:
+                    raise TaskError(f'{what}: UAL state is UNINITIALIZED (crashed?)')
+                task.feedback('MOVING', f'{what}: {math.hypot(dxy, dz):.1f} m to go')
+                self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
+        except TaskPreempted:
+            self.hold()
+            raise
+
+    def hold(self) -> None:
+        """Stop where the robot is (a waypoint at the current pose); quiet if that fails."""
+        try:
+            p = self.position()
+            if self.is_moving_state():
+                self.send_waypoint(p[0], p[1], p[2], p[3])
+        except Exception as e:
+            self.backend.logerr_throttle(2.0, f'hold failed: {e}')
+
+    def is_moving_state(self) -> bool:
+        """True when the UAL accepts motion commands (flying UAV / any UGV)."""
+        return self.ual_state in (C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL)
+
+    def send_velocity(self, v: Sequence[float], yaw_rate: float = 0.0) -> None:
+        """ual/set_velocity in the arena frame (the UAL stops the robot 0.5 s after the last one)."""
+        msg = TwistStamped()
+        msg.header.stamp = self._stamp()
+        msg.header.frame_id = C.GLOBAL_FRAME
+        msg.twist.linear.x, msg.twist.linear.y, msg.twist.linear.z = (float(v[0]), float(v[1]), float(v[2]))
+        msg.twist.angular.z = float(yaw_rate)
+        self.vel_pub.publish(msg)
+
+    # ---- regions ----------------------------------------------------------------------------------------
+    def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None) -> None:
+        """Ask for box under label until granted (2 Hz); TaskError after timeout s."""
+        if not self.p['use_regions']:
+            return
+        lo, hi = box
+        req = AskForRegionRequest(agent_id=self.agent_id, label=label)
+        req.min_corner = PointStamped()
+        req.min_corner.header.frame_id = C.GLOBAL_FRAME
+        req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z = map(float, lo)
+        req.max_corner = PointStamped()
+        req.max_corner.header.frame_id = C.GLOBAL_FRAME
+        req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z = map(float, hi)
+        timeout = float(self.p['region_timeout']) if timeout is None else timeout
+        end = self.backend.now() + timeout
+        while True:
+            task.check_preempt()
+            try:
+                if self.ask_srv(req).success:
+                    return
+                why = 'occupied by another agent'
+            except Exception as e:
+                why = f'ask_for_region failed: {e}'
+            if self.backend.now() > end:
+                raise TaskError(f'region {label} not granted after {timeout:.0f} s ({why})')
+            task.feedback('WAITING_REGION', f'waiting for region {label}: {why}')
+            self.backend.sleep(0.5)
+
+    def free(self, label: str = '', free_all: bool = False) -> None:
+        """Free one region (or all of ours); errors are only logged (the manager may be gone)."""
+        if not self.p['use_regions']:
+            return
+        try:
+            self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, label=label, free_all=free_all))
+        except Exception as e:
+            self.backend.logerr_throttle(5.0, f'free_regions failed: {e}')
+
+    # ---- payload ---------------------------------------------------------------------------------------
+    def trigger(self, srv: Any, what: str) -> None:
+        """Call a std_srvs/Trigger actuator; TaskError when it fails."""
+        try:
+            res = srv()
+        except Exception as e:
+            raise TaskError(f'{what} failed: {e}')
+        if not res.success:
+            raise TaskError(f'{what} refused: {res.message}')
+
+    def start_pump(self) -> None:
+        """Start shooting water."""
+        self.trigger(self.pump_start_srv, 'start_pump')
+        self.pumping = True
+
+    def stop_pump(self) -> None:
+        """Stop shooting water (never raises: it is called on the way out of errors)."""
+        self.pumping = False
+        try:
+            self.pump_stop_srv()
+        except Exception as e:
+            self.backend.logerr_throttle(2.0, f'stop_pump failed: {e}')
+
+    def fire_detected(self) -> Optional[bool]:
+        """The thermal camera's CheckFire answer (None when the detector does not answer)."""
+        try:
+            return bool(self.check_fire_srv().fire_detected)
+        except Exception as e:
+            self.backend.logerr_throttle(5.0, f'thermal_detection/fire_detected failed: {e}')
+            return None
+
+    def set_object_status(self, object_id: int, status: int) -> None:
+        """Tell the estimator a fire's new status (errors are only logged)."""
+        try:
+            self.status_srv(SetObjectStatusRequest(object_id=int(object_id), object_status=int(status),
+                                                   object_type=C.TYPE_FIRE))
+        except Exception as e:
+            self.backend.logerr_throttle(5.0, f'set_object_status failed: {e}')
+
+    def water_empty(self) -> bool:
+        """True when the flow meter says the tank is (nearly) empty."""
+        return math.isfinite(self.water_level) and self.water_level <= float(self.p['water_empty'])
+
+    # ---- framework hooks -------------------------------------------------------------------------------
+    def safe_stop(self) -> None:
+        """After a failed or preempted task: pump off, stop where we are."""
+        if self.pumping or self.p['payload'] == 'water':
+            self.stop_pump()
+        self.hold()
+
+    def _on_cost(self, req: Any) -> GetCostToGoToResponse:
+        """get_cost_to_go_to: metres to travel (-1 when the waypoint is invalid or unreachable)."""
+        try:
+            p = req.waypoint.pose.position
+            target = (p.x, p.y, p.z)
+            self.check_point(target)
+            return GetCostToGoToResponse(cost=float(self.cost_to_go_to(target)))
+        except (ValueError, TaskError) as e:
+            self.backend.logerr_throttle(5.0, f'get_cost_to_go_to: {e}')
+            return GetCostToGoToResponse(cost=-1.0)
+
+    def cost_to_go_to(self, target: Sequence[float]) -> float:
+        """Straight-line distance (UAV); the UGV plans around the building."""
+        return float(np.linalg.norm(np.asarray(target) - self.position()[:3]))

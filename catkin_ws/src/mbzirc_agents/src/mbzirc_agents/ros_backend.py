@@ -1,0 +1,68 @@
+"""The ROS side of the framework: rospy and actionlib behind the small backend interface.
+
+Why a backend: the framework's logic (dispatch, busy rejection, preemption, results) is tested with a
+fake backend and no ROS master; this class is the only place that makes real ROS objects for it.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import actionlib
+import rospy
+
+
+class RosBackend:
+    """rospy implementation of the backend used by AgentInterface and Agent."""
+
+    def subscriber(self, topic: str, msg_type: Any, callback: Callable[[Any], None]) -> Any:
+        """A rospy.Subscriber with a small queue (we only want fresh data)."""
+        return rospy.Subscriber(topic, msg_type, callback, queue_size=10)
+
+    def publisher(self, topic: str, msg_type: Any, latch: bool = False) -> Any:
+        """A rospy.Publisher."""
+        return rospy.Publisher(topic, msg_type, queue_size=10, latch=latch)
+
+    def service(self, name: str, srv_type: Any, handler: Callable[[Any], Any]) -> Any:
+        """A rospy.Service."""
+        return rospy.Service(name, srv_type, handler)
+
+    def service_proxy(self, name: str, srv_type: Any) -> Any:
+        """A rospy.ServiceProxy (not persistent: the server may restart)."""
+        return rospy.ServiceProxy(name, srv_type)
+
+    def action_server(self, name: str, action: Any, execute_cb: Callable[[Any], None]) -> Any:
+        """A started actionlib SimpleActionServer."""
+        server = actionlib.SimpleActionServer(name, action, execute_cb=execute_cb, auto_start=False)
+        server.start()
+        return server
+
+    def timer(self, period: float, callback: Callable[[Any], None]) -> Any:
+        """A rospy.Timer (sim time aware)."""
+        return rospy.Timer(rospy.Duration(period), callback)
+
+    def now(self) -> float:
+        """Current ROS time in seconds (sim time when /use_sim_time)."""
+        return rospy.get_time()
+
+    def sleep(self, seconds: float) -> None:
+        """rospy.sleep; returns quietly on shutdown or when sim time jumps back."""
+        try:
+            rospy.sleep(seconds)
+        except (rospy.ROSInterruptException, rospy.exceptions.ROSTimeMovedBackwardsException):
+            pass
+
+    def is_shutdown(self) -> bool:
+        """rospy.is_shutdown."""
+        return rospy.is_shutdown()
+
+    def loginfo_throttle(self, period: float, msg: str) -> None:
+        rospy.loginfo_throttle(period, msg)
+
+    def logerr_throttle(self, period: float, msg: str) -> None:
+        rospy.logerr_throttle(period, msg)
+
+    def logerr(self, msg: str) -> None:
+        rospy.logerr(msg)
+
+    def logwarn(self, msg: str) -> None:
+        rospy.logwarn(msg)

@@ -1,0 +1,1 @@
+"""Task modules of the UAV and UGV agents (one module per group of tasks)."""

@@ -1,0 +1,144 @@
+"""Indoor tasks (UAV and UGV): enter_building, search_indoor, extinguish_indoor_fire.
+
+Indoors there is no room for the regions' planning around the building: moves are straight legs of
+the sub-task `move` (UAV: a straight go_to; UGV: a straight drive), given by the caller's path.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import constants as C
+from ..framework import AgentTask, TaskError
+from ..geometry import facing_pose
+from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
+
+
+def gen_enter_building(goal, agent) -> dict:
+    """EnterBuilding goal -> userdata: floor 1..2 (UAVs enter through windows), entry pose outside."""
+    floor = parse_floor(goal.floor, (1, 2))
+    pos, yaw = parse_pose(goal.entry, agent, 'entry')
+    if yaw is None:
+        raise ValueError('entry needs an orientation (the direction to fly in)')
+    return {'floor': floor, 'entry': (pos, yaw)}
+
+
+def gen_search_indoor_uav(goal, agent) -> dict:
+    """UAV SearchIndoor goal: floor 1..2 and a non-empty path inside."""
+    path = parse_path(goal.path, agent)
+    if not path:
+        raise ValueError('empty path: the UAV needs the waypoints to search')
+    return {'floor': parse_floor(goal.floor, (1, 2)), 'path': path}
+
+
+def gen_search_indoor_ugv(goal, agent) -> dict:
+    """UGV SearchIndoor goal: floor 0 only; path optional (default: through the door)."""
+    return {'floor': parse_floor(goal.floor, (0,)), 'path': parse_path(goal.path, agent)}
+
+
+def gen_indoor_fire(goal, agent) -> dict:
+    """A goal naming an indoor fire."""
+    return {'fire_id': parse_fire(goal.fire_id, agent, (C.SUBTYPE_INDOOR,))}
+
+
+class EnterBuilding(AgentTask):
+    """Fly to the entry pose outside a window, then ~entry_depth m straight ahead through it."""
+    INPUT_KEYS = ['floor', 'entry']
+
+    def run(self, ud) -> str:
+        (pos, yaw) = ud.entry
+        self.feedback('APPROACHING', f'to the window of floor {ud.floor}')
+        if self.call_task('go_to', {'waypoint': (pos, yaw)}) != C.SUCCESS:
+            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        d = float(self.agent.p['entry_depth'])
+        inside = (pos[0] + d * math.cos(yaw), pos[1] + d * math.sin(yaw), pos[2])
+        self.feedback('ENTERING', 'flying through the window')
+        if self.call_task('move', {'waypoint': (inside, yaw)}) != C.SUCCESS:
+            raise TaskError(self.last_sub_result.get('message', 'entering failed'))
+        self.result['message'] = f'inside floor {ud.floor}'
+        return C.SUCCESS
+
+
+class SearchIndoor(AgentTask):
+    """Follow the path inside; at each waypoint turn on the spot looking with the thermal camera."""
+    INPUT_KEYS = ['floor', 'path']
+
+    def run(self, ud) -> str:
+        a = self.agent
+        path = list(ud.path) or self.default_path()
+        found: list = []
+        for i, (wp, yaw) in enumerate(path):
+            self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
+            if self.call_task('move', {'waypoint': (wp, yaw)}) != C.SUCCESS:
+                raise TaskError(f'waypoint {i + 1}: {self.last_sub_result.get("message")}')
+            found = self._look_around(ud.floor, i, len(path))
+            if found and a.p['stop_at_first_fire']:
+                break
+        self.result['fire_ids'] = found
+        self.result['message'] = (f'active indoor fires on floor {ud.floor}: {found}' if found
+                                  else f'no indoor fire found on floor {ud.floor}')
+        return C.SUCCESS
+
+    def default_path(self) -> list:
+        """The path to search when the goal gives none (the UGV's: through the door)."""
+        raise TaskError('no path given')
+
+    def _fires(self, floor: int) -> list:
+        return [int(o.id) for o in self.agent.fires((C.SUBTYPE_INDOOR,))
+                if floor_of(o.pose.pose.position.z) == floor or floor == 0 and o.pose.pose.position.z < 5.0]
+
+    def _look_around(self, floor: int, i: int, n: int) -> list:
+        a = self.agent
+        p = a.position()
+        base = round(p[3] / (math.pi / 2)) * (math.pi / 2)   # the walls are axis-aligned: look along them
+        for k in range(4):
+            yaw = base + k * math.pi / 2
+            self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/4')
+            a.move_to(self, p[:3], yaw, 'turning')
+            self.sleep(1.5)                          # the detector needs > 1 s of hot frames
+            if a.fire_detected():
+                self.sleep(float(a.p['confirm_time']) / 2)
+            found = self._fires(floor)
+            if found:
+                return found
+        return self._fires(floor)
+
+
+class ExtinguishIndoorFire(AgentTask):
+    """Face the fire at ~indoor_fire_distance (from the side the robot is on) and pump until cold."""
+    INPUT_KEYS = ['fire_id']
+
+    def run(self, ud) -> str:
+        a = self.agent
+        if a.water_empty():
+            raise TaskError('tank empty')
+        fire = np.array(fire_position(a, ud.fire_id))
+        here = a.position()
+        frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
+        pos, yaw = facing_pose(fire, frm, float(a.p['indoor_fire_distance']))
+        self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
+        if self.call_task('move', {'waypoint': (pos, yaw)}) != C.SUCCESS:
+            raise TaskError(self.last_sub_result.get('message', 'approach failed'))
+        try:
+            a.start_pump()
+            start = a.backend.now()
+            cold = False
+            while not a.water_empty():
+                self.check_preempt()
+                if a.backend.now() - start > float(a.p['extinguish_timeout']):
+                    raise TaskError('timeout while pumping')
+                self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
+                self.sleep(0.5)
+                if a.backend.now() - start > 3.0 and a.fire_detected() is False:
+                    cold = True
+                    break
+        finally:
+            a.stop_pump()
+        cold = cold or a.fire_detected() is False
+        if cold:
+            a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
+        water = a.water_level if math.isfinite(a.water_level) else 0.0
+        self.result.update(extinguished=cold, water_left=max(0.0, water),
+                           message=f'fire {ud.fire_id} ' + ('extinguished' if cold else 'still hot, tank empty'))
+        return C.SUCCESS

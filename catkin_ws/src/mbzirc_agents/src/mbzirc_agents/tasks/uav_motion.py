@@ -1,0 +1,212 @@
+"""UAV motion tasks: take_off, land, go_to, follow_path, hover, go_home_and_refill.
+
+Every motion first reserves its airspace with the shared-region manager (a vertical column to take off
+or land, the box swept by a go-to leg), then holds a small box around where the UAV hovers, so that two
+UAVs never share airspace.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from uav_abstraction_layer.srv import Land as LandSrv
+from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOffRequest
+
+from .. import constants as C
+from ..framework import AgentTask, TaskError
+from ..geometry import column_box, plan_2d, swept_box
+from .common import parse_path, parse_pose
+
+LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
+FLYING = (C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL)
+
+
+def gen_take_off(goal, agent) -> dict:
+    """TakeOff goal -> userdata; the height must be a positive number inside the arena."""
+    h = float(goal.height)
+    if not math.isfinite(h) or h <= 0.0:
+        raise ValueError(f'height must be a positive number, got {goal.height}')
+    if h > agent.arena[5]:
+        raise ValueError(f'height {h} is above the arena ceiling {agent.arena[5]}')
+    return {'height': h}
+
+
+def gen_go_to(goal, agent) -> dict:
+    """GoTo goal -> userdata (validated waypoint)."""
+    pos, yaw = parse_pose(goal.waypoint, agent)
+    return {'waypoint': (pos, yaw)}
+
+
+def gen_follow_path(goal, agent) -> dict:
+    """FollowPath goal -> userdata; an empty path is a bad goal."""
+    path = parse_path(goal.path, agent)
+    if not path:
+        raise ValueError('empty path')
+    return {'path': path}
+
+
+def gen_hover(goal, agent) -> dict:
+    """Hover goal -> userdata; duration >= 0 (0: until cancelled)."""
+    d = float(goal.duration)
+    if not math.isfinite(d) or d < 0:
+        raise ValueError(f'duration must be >= 0, got {goal.duration}')
+    return {'duration': d}
+
+
+def gen_empty(goal, agent) -> dict:
+    """Goals without fields."""
+    return {}
+
+
+def hold_box(agent, p):
+    """The box a hovering UAV keeps for itself."""
+    h = float(agent.p['hold_half_size'])
+    return (np.array([p[0] - h, p[1] - h, p[2] - h]), np.array([p[0] + h, p[1] + h, p[2] + h]))
+
+
+class TakeOff(AgentTask):
+    """Reserve the column above, take off to `height` above the current position, hold there."""
+    INPUT_KEYS = ['height']
+
+    def run(self, ud) -> str:
+        a = self.agent
+        p = a.position()
+        if a.ual_state in FLYING:
+            self.result['message'] = f'already flying at z {p[2]:.1f}'
+            return C.SUCCESS
+        target_z = p[2] + ud.height
+        half = float(a.p['hold_half_size'])
+        self.feedback('WAITING_REGION', 'reserving the take-off column')
+        a.reserve(self, 'take_off', column_box(p[0], p[1], p[2], target_z + half, half))
+        self.feedback('TAKING_OFF', f'taking off to z {target_z:.1f}')
+        try:
+            srv = a.iface.add_client('ual/take_off', TakeOffSrv)
+            srv(TakeOffRequest(height=ud.height, blocking=False))
+        except Exception as e:
+            raise TaskError(f'ual/take_off failed: {e}')
+        self.wait_for(lambda: a.ual_state == C.UAL_FLYING_AUTO and abs(a.position()[2] - target_z) < 0.3,
+                      ud.height / 0.5 + 20.0, 'the take-off to finish')
+        a.reserve(self, 'hold', hold_box(a, a.position()))
+        a.free('take_off')
+        self.result['message'] = f'flying at z {a.position()[2]:.1f}'
+        return C.SUCCESS
+
+
+class Land(AgentTask):
+    """Reserve the column below, land where the UAV is, free every region."""
+
+    def run(self, ud) -> str:
+        a = self.agent
+        p = a.position()
+        if a.ual_state in LANDED:
+            a.free(free_all=True)
+            self.result['message'] = 'already landed'
+            return C.SUCCESS
+        half = float(a.p['hold_half_size'])
+        self.feedback('WAITING_REGION', 'reserving the landing column')
+        a.reserve(self, 'land', column_box(p[0], p[1], a.arena[2], p[2] + half, half))
+        self.feedback('LANDING', f'landing from z {p[2]:.1f}')
+        try:
+            srv = a.iface.add_client('ual/land', LandSrv)
+            srv(LandRequest(blocking=False))
+        except Exception as e:
+            raise TaskError(f'ual/land failed: {e}')
+        self.wait_for(lambda: a.ual_state in LANDED, p[2] / 0.4 + 20.0, 'the landing to finish')
+        a.free(free_all=True)
+        self.result['message'] = 'landed'
+        return C.SUCCESS
+
+
+class GoTo(AgentTask):
+    """Fly to a waypoint: around tall buildings in legs; each leg through a reserved box.
+
+    Args (task_args): straight (False): fly one straight leg (entering through a window).
+    """
+    INPUT_KEYS = ['waypoint']
+
+    def run(self, ud) -> str:
+        a = self.agent
+        (target, yaw) = ud.waypoint
+        if a.ual_state not in FLYING:
+            raise TaskError('not flying: take off first')
+        start = a.position()
+        legs = [tuple(target)] if self.args.get('straight') else self._legs(start[:3], target)
+        margin = float(a.p['region_margin'])
+        for i, leg in enumerate(legs):
+            here = a.position()
+            self.feedback('WAITING_REGION', f'leg {i + 1}/{len(legs)}: reserving the way to {_fmt(leg)}')
+            a.reserve(self, 'go_to', swept_box(here[:3], leg, margin))
+            leg_yaw = yaw if i == len(legs) - 1 else None
+            a.move_to(self, leg, leg_yaw, f'leg {i + 1}/{len(legs)} to {_fmt(leg)}')
+            a.reserve(self, 'hold', hold_box(a, a.position()))
+            a.free('go_to')
+        self.result['message'] = f'at {_fmt(a.position()[:3])}'
+        return C.SUCCESS
+
+    def _legs(self, start, target) -> list:
+        """Straight when nothing tall is in the way, else the corners of a 2D plan at the target height."""
+        lo = min(start[2], target[2]) - 0.5
+        obstacles = [b for b in C.BUILDINGS if b[4] > lo]
+        clearance = float(self.agent.p['building_clearance'])
+        for c in (clearance, 0.5 * clearance, 0.3):   # near a wall (shooting distance) a smaller one fits
+            path = plan_2d(start[:2], target[:2], obstacles, c)
+            if path is not None:
+                return [(x, y, target[2]) for x, y in path[1:-1]] + [tuple(target)]
+        raise TaskError(f'no path to {_fmt(target)} around the building')
+
+
+class FollowPath(AgentTask):
+    """go_to every waypoint of the path in turn."""
+    INPUT_KEYS = ['path']
+
+    def run(self, ud) -> str:
+        for i, wp in enumerate(ud.path):
+            self.feedback('FOLLOWING', f'waypoint {i + 1}/{len(ud.path)}')
+            if self.call_task('go_to', {'waypoint': wp}) != C.SUCCESS:
+                raise TaskError(f'waypoint {i + 1}: {self.last_sub_result.get("message")}')
+        self.result['message'] = f'followed {len(ud.path)} waypoints'
+        return C.SUCCESS
+
+
+class Hover(AgentTask):
+    """Hold position for `duration` s (0: until cancelled)."""
+    INPUT_KEYS = ['duration']
+
+    def run(self, ud) -> str:
+        if self.agent.ual_state not in FLYING:
+            raise TaskError('not flying')
+        self.feedback('HOVERING', f'hovering {ud.duration:.0f} s' if ud.duration else 'hovering until cancelled')
+        self.sleep(ud.duration if ud.duration > 0 else 1e9)
+        self.result['message'] = f'hovered {ud.duration:.0f} s'
+        return C.SUCCESS
+
+
+class GoHomeAndRefill(AgentTask):
+    """Fly home at the cruise altitude, land, and wait for the reset (water refilled / new blanket)."""
+
+    def run(self, ud) -> str:
+        a = self.agent
+        home = a.home
+        if home is None:
+            raise TaskError('home unknown (no pose yet)')
+        if a.ual_state in FLYING:
+            z = max(a.position()[2], float(a.p['cruise_altitude']))
+            self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
+            if self.call_task('go_to', {'waypoint': ((home[0], home[1], z), None)}) != C.SUCCESS:
+                raise TaskError(f'going home: {self.last_sub_result.get("message")}')
+            if self.call_task('land', {}) != C.SUCCESS:
+                raise TaskError(f'landing: {self.last_sub_result.get("message")}')
+        self.feedback('REFILLING', 'waiting for the reset (water / blanket)')
+        if a.p['payload'] == 'water':
+            full = 0.95 * float(a.p['tank_capacity'])
+            self.wait_for(lambda: a.water_level >= full, float(a.p['refill_timeout']), 'the tank to be refilled')
+        else:
+            self.wait_for(lambda: a.blanket_attached, float(a.p['refill_timeout']), 'a new blanket')
+        self.result.update(message='home, refilled', water_level=max(0.0, a.water_level if
+                                                                     math.isfinite(a.water_level) else 0.0),
+                           has_blanket=a.blanket_attached)
+        return C.SUCCESS
+
+
+def _fmt(p) -> str:
+    return f'({p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f})'

@@ -1,0 +1,67 @@
+"""UGV tasks: go_to (2D path planning around the building), search_indoor (through the door).
+
+extinguish_indoor_fire is the shared indoor task (tasks/indoor.py) with the UGV's straight `move`.
+"""
+from __future__ import annotations
+
+import math
+
+from .. import constants as C
+from ..framework import AgentTask, TaskError
+from ..geometry import plan_2d
+from .indoor import SearchIndoor
+
+
+class UgvGoTo(AgentTask):
+    """Drive to a waypoint (z ignored): a 2D plan around the building footprints, leg by leg.
+
+    Args (task_args): straight (False): one straight leg (indoors, through the door).
+    """
+    INPUT_KEYS = ['waypoint']
+
+    def run(self, ud) -> str:
+        a = self.agent
+        (target, yaw) = ud.waypoint
+        here = a.position()
+        if self.args.get('straight'):
+            legs = [(target[0], target[1])]
+        else:
+            path = plan_2d(here[:2], target[:2], C.BUILDINGS, float(a.p['building_clearance']))
+            if path is None:
+                raise TaskError(f'no path to ({target[0]:.1f}, {target[1]:.1f}) around the building')
+            legs = path[1:]
+        for i, (x, y) in enumerate(legs):
+            last = i == len(legs) - 1
+            leg_yaw = yaw if last and yaw is not None else math.atan2(y - a.position()[1], x - a.position()[0])
+            a.move_to(self, (x, y, here[2]), leg_yaw, f'leg {i + 1}/{len(legs)} to ({x:.1f}, {y:.1f})',
+                      tolerance=0.4)
+        self.result['message'] = f'at ({target[0]:.1f}, {target[1]:.1f})'
+        return C.SUCCESS
+
+
+class UgvSearchIndoor(SearchIndoor):
+    """Drive (planned) to the first waypoint - by default outside the door - then straight inside."""
+
+    def run(self, ud) -> str:
+        path = list(ud.path) or self.default_path()
+        self.feedback('GOING', 'to the entrance')
+        if self.call_task('go_to', {'waypoint': path[0]}) != C.SUCCESS:
+            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        ud_path = path[1:] if len(path) > 1 else path
+        return super().run(_UD(ud.floor, ud_path))
+
+    def default_path(self) -> list:
+        p = self.agent.p
+        out, ins = p['door_outside'], p['door_inside']
+        into = math.atan2(ins[1] - out[1], ins[0] - out[0])
+        z = self.agent.position()[2]
+        pts = [((out[0], out[1], z), into), ((ins[0], ins[1], z), into)]
+        pts += [((x, y, z), None) for x, y in p['indoor_search_path']]
+        return pts
+
+
+class _UD:
+    """Minimal userdata (floor, path) for re-using SearchIndoor.run."""
+
+    def __init__(self, floor, path) -> None:
+        self.floor, self.path = floor, path

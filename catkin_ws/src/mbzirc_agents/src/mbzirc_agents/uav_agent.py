@@ -1,0 +1,60 @@
+"""UavAgent: the UAV's tasks on top of RobotAgent."""
+from __future__ import annotations
+
+from typing import Any, Dict
+
+from mbzirc_comm_objs import msg as M
+
+from .robot_agent import RobotAgent
+from .tasks import indoor, uav_fires as F, uav_motion as U
+
+# name, task class, action name (mbzirc_comm_objs.msg.<X>Action), gen_userdata, sub-tasks
+UAV_TASKS = [
+    ('take_off', U.TakeOff, 'TakeOff', U.gen_take_off, []),
+    ('land', U.Land, 'Land', U.gen_empty, []),
+    ('go_to', U.GoTo, 'GoTo', U.gen_go_to, []),
+    ('follow_path', U.FollowPath, 'FollowPath', U.gen_follow_path, ['go_to']),
+    ('hover', U.Hover, 'Hover', U.gen_hover, []),
+    ('search_facade', F.SearchFacade, 'SearchFacade', F.gen_search_facade, ['go_to']),
+    ('go_to_facade_fire', F.GoToFacadeFire, 'GoToFacadeFire', F.gen_facade_fire, ['go_to']),
+    ('extinguish_facade_fire', F.ExtinguishFacadeFire, 'ExtinguishFacadeFire', F.gen_facade_fire, ['go_to']),
+    ('look_for_ground_fires', F.LookForGroundFires, 'LookForGroundFires', F.gen_look_for_ground_fires, []),
+    ('extinguish_ground_fire', F.ExtinguishGroundFire, 'ExtinguishGroundFire', F.gen_ground_fire, ['go_to']),
+    ('enter_building', indoor.EnterBuilding, 'EnterBuilding', indoor.gen_enter_building, ['go_to', 'move']),
+    ('search_indoor', indoor.SearchIndoor, 'SearchIndoor', indoor.gen_search_indoor_uav, ['move']),
+    ('extinguish_indoor_fire', indoor.ExtinguishIndoorFire, 'ExtinguishIndoorFire', indoor.gen_indoor_fire,
+     ['move']),
+    ('go_home_and_refill', U.GoHomeAndRefill, 'GoHomeAndRefill', U.gen_empty, ['go_to', 'land']),
+]
+# Sub-task name -> (class, task_args)
+UAV_SUB_TASKS = {'go_to': (U.GoTo, {}), 'move': (U.GoTo, {'straight': True}), 'land': (U.Land, {})}
+
+
+def register_tasks(agent: Any, tasks: list, sub_tasks: Dict[str, tuple]) -> None:
+    """add_task every task of the table (and its sub-tasks)."""
+    for name, cls, action, gen, subs in tasks:
+        agent.add_task(name, cls, getattr(M, f'{action}Action'), gen,
+                       getattr(M, f'{action}Result'), getattr(M, f'{action}Feedback'))
+        for sub in subs:
+            sub_cls, args = sub_tasks[sub]
+            agent.add_sub_task(sub, name, sub_cls, args)
+
+
+class UavAgent(RobotAgent):
+    """A UAV: take-off, flight through reserved regions, facade / ground / indoor fires, refill."""
+    ROBOT_TYPE = 'uav'
+
+    def __init__(self, agent_id: str, backend: Any, params: Dict[str, Any], namespace: str = '') -> None:
+        super().__init__(agent_id, backend, params, namespace)
+        register_tasks(self, UAV_TASKS, UAV_SUB_TASKS)
+
+    def return_home(self) -> Any:
+        """After a long heartbeat loss: go home and land (and take the reset if it comes)."""
+        if self.ual_state not in (4, 5):     # not flying: stay where we are
+            return None
+        try:
+            return self.submit('go_home_and_refill', {}, force=True)
+        except RuntimeError as e:
+            self.backend.logwarn(f'cannot go home now: {e}')
+            self._went_home = False
+            return None

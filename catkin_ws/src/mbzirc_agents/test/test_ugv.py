@@ -1,0 +1,71 @@
+#!/usr/bin/env python3
+"""rostest with ual_sim: the UGV agent's bad goals, its planned go_to and search_indoor through the door."""
+import math
+import unittest
+
+import rospy
+import rostest
+from actionlib_msgs.msg import GoalStatus
+from agent_test_utils import SimRobots, pose, run, wait_wall
+from mbzirc_comm_objs.msg import ObjectList
+from ual_sim.msg import FireStateArray, Score
+
+from mbzirc_agents import constants as C
+from mbzirc_agents.geometry import _segment_hits_rect
+
+
+class TestUgv(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_ugv')
+        cls.sim = SimRobots()
+        cls.trace = []
+        cls.crashed = []
+        rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
+        assert wait_wall(lambda: 0 in cls.sim.poses, 60), 'no /sim/robots'
+        rospy.Timer(rospy.Duration(0.2), lambda e: cls.trace.append(cls.sim.poses[0]))
+
+    def test_1_bad_goals(self):
+        state, res = run(0, 'search_indoor', 'SearchIndoor', 30, floor=2)
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertIn('floor 2', res.message)
+        state, res = run(0, 'go_to', 'GoTo', 30, waypoint=pose(float('nan'), 1, 0))
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertIn('NaN', res.message)
+        state, res = run(0, 'extinguish_indoor_fire', 'ExtinguishIndoorFire', 30, fire_id=5)
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertIn('unknown fire id 5', res.message)
+
+    def test_2_enters_through_the_door(self):
+        state, res = run(0, 'search_indoor', 'SearchIndoor', 200, floor=0)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        self.__class__.found = list(res.fire_ids)
+        self.assertEqual(self.crashed, [])
+        x, y, _ = self.sim.poses[0]
+        tower = C.TOWER
+        self.assertTrue(tower[0] < x < tower[2] and tower[1] < y < tower[3], f'UGV not inside: {x}, {y}')
+        # it crossed facade B (y = 6.7) through the door (x 13.0-15.5)
+        crossings = [(a, b) for a, b in zip(self.trace[:-1], self.trace[1:]) if a[1] < 6.7 <= b[1]]
+        self.assertTrue(crossings)
+        for a, b in crossings:
+            self.assertTrue(13.0 < (a[0] + b[0]) / 2 < 15.5, f'crossed the wall at x {a[0]:.2f}')
+        # outside, the drive never cut through a building footprint
+        outside = [p for p in self.trace if p[1] < 6.0]
+        for a, b in zip(outside[:-1], outside[1:]):
+            for bld in C.BUILDINGS:
+                self.assertFalse(_segment_hits_rect(a, b, bld[:4]))
+
+    def test_3_found_the_indoor_fire(self):
+        """The ground-floor fire found by search_indoor is the active one (ground truth /sim/fires)."""
+        fires = rospy.wait_for_message('/sim/fires', FireStateArray, 10).fires
+        active = [f for f in fires if f.kind == 2 and f.floor == 0 and f.active][0]
+        self.assertEqual(len(getattr(self, 'found', [])), 1)
+        est = rospy.wait_for_message('/estimated_objects', ObjectList, 10).objects
+        obj = [o for o in est if o.id == self.found[0]][0]
+        p = obj.pose.pose.position
+        self.assertLess(math.dist((p.x, p.y, p.z), (active.position.x, active.position.y, active.position.z)),
+                        1.5)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('mbzirc_agents', 'test_ugv', TestUgv)

@@ -1,0 +1,106 @@
+"""A kinematic UAV behind the FakeBackend: the UAL services and topics the agents use, sped up.
+
+Why: the tasks' logic (regions, waiting, preemption, goal checks) is tested in a second without ROS;
+the rostests check the same against ual_sim.
+"""
+import math
+import threading
+import time
+
+import numpy as np
+from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs.srv import AskForRegionResponse, FreeRegionsResponse
+from std_msgs.msg import Float32
+from std_srvs.srv import TriggerResponse
+from uav_abstraction_layer.msg import State
+from uav_abstraction_layer.srv import GoToWaypointResponse, LandResponse, TakeOffResponse
+
+from mbzirc_agents.region_manager_core import RegionManager
+
+
+class FakeUal:
+    def __init__(self, backend, pos=(0.0, 0.0, 0.0), speedup=4.0, regions=None):
+        self.be = backend
+        self.pos = np.array(pos, float)
+        self.yaw = 0.0
+        self.state = State.LANDED_DISARMED
+        self.goal = None
+        self.vel = None
+        self.vel_time = 0.0
+        self.water = 2.0
+        self.pump = False
+        self.speedup = speedup
+        self.regions = regions or RegionManager()
+        self.waypoints = []
+        self.lock = threading.Lock()
+        h = backend.handlers
+        h['ual/take_off'] = self.take_off
+        h['ual/land'] = self.land
+        h['ual/go_to_waypoint'] = self.go_to
+        h['actuators_system/start_pump'] = lambda r: self._pump(True)
+        h['actuators_system/stop_pump'] = lambda r: self._pump(False)
+        h['/ask_for_region'] = lambda r: AskForRegionResponse(success=self.regions.ask(
+            r.agent_id, r.label, (r.min_corner.point.x, r.min_corner.point.y, r.min_corner.point.z),
+            (r.max_corner.point.x, r.max_corner.point.y, r.max_corner.point.z))[0])
+        h['/free_regions'] = lambda r: FreeRegionsResponse(success=self.regions.free(r.agent_id, r.label, r.free_all))
+        self.stop = False
+        self.thread = threading.Thread(target=self._loop, daemon=True)
+        self.thread.start()
+
+    def _pump(self, on):
+        self.pump = on
+        return TriggerResponse(success=True, message='')
+
+    def take_off(self, req):
+        with self.lock:
+            self.goal = (self.pos + [0, 0, req.height], self.yaw)
+            self.state = State.TAKING_OFF
+        return TakeOffResponse()
+
+    def land(self, req):
+        with self.lock:
+            self.goal = (np.array([self.pos[0], self.pos[1], 0.0]), self.yaw)
+            self.state = State.LANDING
+        return LandResponse()
+
+    def go_to(self, req):
+        p, q = req.waypoint.pose.position, req.waypoint.pose.orientation
+        with self.lock:
+            if self.state not in (State.FLYING_AUTO, State.FLYING_MANUAL):
+                return GoToWaypointResponse()
+            self.goal = (np.array([p.x, p.y, p.z]), math.atan2(2 * q.w * q.z, 1 - 2 * q.z * q.z))
+            self.vel = None
+            self.waypoints.append(self.goal)
+        return GoToWaypointResponse()
+
+    def _loop(self):
+        dt = 0.02
+        while not self.stop:
+            with self.lock:
+                if self.goal is not None:
+                    g, gy = self.goal
+                    d = g - self.pos
+                    n = np.linalg.norm(d)
+                    step = 1.6 * self.speedup * dt
+                    self.pos = g.copy() if n <= step else self.pos + d / n * step
+                    self.yaw = gy
+                    if n <= step:
+                        if self.state == State.TAKING_OFF:
+                            self.state = State.FLYING_AUTO
+                        elif self.state == State.LANDING:
+                            self.state = State.LANDED_DISARMED
+                if self.pump and self.water > 0:
+                    self.water = max(0.0, self.water - 0.2 * self.speedup * dt)
+                pos, yaw, state, water = self.pos.copy(), self.yaw, self.state, self.water
+            msg = PoseStamped()
+            msg.header.frame_id = 'arena'
+            msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = pos
+            msg.pose.orientation.z, msg.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+            subs = self.be.subs
+            if 'ual/pose' in subs:
+                subs['ual/pose'](msg)
+            if 'ual/state' in subs:
+                subs['ual/state'](State(state=state))
+            if 'actuators_system/water_level' in subs:
+                subs['actuators_system/water_level'](Float32(data=water))
+            time.sleep(dt)

@@ -1,0 +1,77 @@
+"""Controllers and the heartbeat watchdog."""
+import math
+
+import numpy as np
+import pytest
+
+from mbzirc_agents import control as c
+from mbzirc_agents import heartbeat as hb
+
+
+def test_frames_round_trip():
+    v = np.array([1.0, 2.0, 3.0])
+    for yaw in (0.0, 1.0, -2.5):
+        assert c.world_to_body(c.body_to_world(v, yaw), yaw) == pytest.approx(v)
+    assert c.body_to_world((1, 0, 0), math.pi / 2) == pytest.approx([0, 1, 0], abs=1e-12)
+
+
+def test_hole_centering_converges_in_closed_loop():
+    ctl = c.HoleCentering(shoot_distance=1.5)
+    yaw = 0.7
+    uav = np.array([0.0, 0.0, 5.0])
+    hole = np.array([3.0, 1.0, 6.0]) + uav * 0
+    for _ in range(200):
+        rel = c.world_to_body(hole - uav, yaw)
+        if ctl.centred(rel):
+            break
+        v = ctl.velocity(rel, yaw)
+        assert np.linalg.norm(v) <= ctl.vmax + 1e-9
+        uav = uav + v * 0.1
+    assert ctl.centred(c.world_to_body(hole - uav, yaw))
+
+
+def test_hole_not_centred_when_off():
+    assert not c.HoleCentering().centred((1.5, 0.5, 0.0))
+    assert c.HoleCentering().centred((1.5, 0.05, -0.05))
+
+
+def test_ground_centering_never_descends_off_target():
+    ctl = c.GroundFireCentering(release_height=1.5)
+    v = ctl.velocity((0, 0, 4), (5, 0))
+    assert v[2] >= 0 and v[0] > 0
+    uav = np.array([0.0, 0.0, 4.0])
+    for _ in range(400):
+        if ctl.ready(uav, (1.0, -1.0)):
+            break
+        uav = uav + ctl.velocity(uav, (1.0, -1.0)) * 0.1
+    assert ctl.ready(uav, (1.0, -1.0))
+
+
+def test_thermal_pixel_to_ground():
+    assert c.thermal_pixel_to_ground(15.5, 15.5, 4.0) == pytest.approx([0, 0])
+    off = c.thermal_pixel_to_ground(15.5, 0.0, 4.0)    # top of image = ahead
+    assert off[0] > 0 and abs(off[1]) < 1e-9
+    off = c.thermal_pixel_to_ground(31.0, 15.5, 4.0)   # right of image = -y
+    assert off[1] < 0
+
+
+def test_pick_hole_middle_of_three():
+    assert list(c.pick_hole([(2, 0.6, 0), (2, -0.6, 0), (2, 0.02, 0)])) == [2, 0.02, 0]
+    assert c.pick_hole([]) is None
+
+
+def test_yaw_rate_short_way():
+    assert c.yaw_rate_to(3.0, -3.0) > 0
+    assert c.yaw_rate_to(0.0, 0.1) == pytest.approx(0.1)
+
+
+def test_watchdog():
+    w = hb.HeartbeatWatchdog(timeout=5, return_home_timeout=60)
+    assert w.state(100) == hb.OK              # never seen: not lost
+    w.beat(100)
+    assert w.state(104) == hb.OK
+    assert w.state(106) == hb.LOST
+    assert w.state(166) == hb.RETURN_HOME
+    w.beat(167)
+    assert w.state(168) == hb.OK
+    assert w.state(10) == hb.OK               # time jumped back

@@ -1,0 +1,85 @@
+"""Object estimator: association, confirmation, loss, statuses."""
+import numpy as np
+import pytest
+
+from mbzirc_agents import constants as C
+from mbzirc_agents.estimator_core import Detection, ObjectEstimator, classify_fire
+
+
+def det(p, t=0.0, agent='1', typ=C.TYPE_FIRE, cov=None):
+    return Detection(type=typ, position=np.array(p, float),
+                     covariance=np.diag([1.5 ** 2, 1.5 ** 2, 0.25]) if cov is None else cov,
+                     stamp=t, agent_id=agent)
+
+
+def test_three_robots_one_fire_one_track():
+    est = ObjectEstimator(min_updates=3)
+    rng = np.random.default_rng(0)
+    truth = np.array([12.4, 19.5, 6.5])
+    for k in range(30):
+        for agent in ('1', '2', '3'):
+            est.add(det(truth + rng.normal(0, 0.5, 3), t=k * 0.1, agent=agent))
+    objs = est.objects()
+    assert len(objs) == 1
+    assert objs[0].agents == {'1', '2', '3'}
+    assert objs[0].status == C.STATUS_ACTIVE
+    assert np.linalg.norm(objs[0].position - truth) < 0.3
+    assert objs[0].covariance[0, 0] < 1.5 ** 2 / 10      # fused: more certain than one detection
+
+
+def test_two_fires_far_apart_two_tracks_and_types_kept_apart():
+    est = ObjectEstimator(min_updates=1)
+    est.add(det((0, 0, 0)))
+    est.add(det((10, 0, 0)))
+    est.add(det((0, 0, 0), typ=C.TYPE_HOLE))
+    assert len(est.tracks) == 3
+
+
+def test_confirmation_needs_min_updates():
+    est = ObjectEstimator(min_updates=3)
+    est.add(det((0, 0, 0)))
+    est.add(det((0.1, 0, 0)))
+    assert est.objects() == [] and len(est.objects(include_tentative=True)) == 1
+    assert est.objects(include_tentative=True)[0].status == C.STATUS_DETECTED
+    est.add(det((0, 0.1, 0)))
+    assert est.objects()[0].status == C.STATUS_ACTIVE
+
+
+def test_lost_and_found_again_and_tentative_dropped():
+    est = ObjectEstimator(min_updates=2, lost_time=5.0)
+    for t in (0.0, 1.0):
+        est.add(det((0, 0, 0), t=t))
+    est.add(det((20, 20, 0), t=1.0))              # tentative
+    est.tick(3.0)
+    assert est.objects()[0].status == C.STATUS_ACTIVE and len(est.tracks) == 2
+    est.tick(7.0)
+    assert est.objects()[0].status == C.STATUS_LOST
+    assert len(est.tracks) == 1                    # the tentative one was dropped
+    est.add(det((0, 0, 0), t=8.0))
+    assert est.objects()[0].status == C.STATUS_ACTIVE
+
+
+def test_set_status_sticky_and_errors():
+    est = ObjectEstimator(min_updates=1)
+    tid = est.add(det((0, 0, 0))).id
+    assert est.set_status(tid, C.STATUS_EXTINGUISHED) == ''
+    est.add(det((0.2, 0, 0), t=1.0))
+    assert est.tracks[tid].status == C.STATUS_EXTINGUISHED and len(est.tracks) == 1
+    assert 'unknown object id' in est.set_status(999, C.STATUS_ACTIVE)
+    assert 'type' in est.set_status(tid, C.STATUS_ACTIVE, object_type=C.TYPE_HOLE)
+    assert 'unknown status' in est.set_status(tid, 77)
+
+
+def test_bad_covariance_replaced_and_nan_rejected():
+    est = ObjectEstimator(min_updates=1)
+    t = est.add(det((0, 0, 0), cov=np.full((3, 3), np.nan)))
+    assert np.all(np.isfinite(t.covariance))
+    with pytest.raises(ValueError):
+        est.add(det((np.nan, 0, 0)))
+
+
+def test_classify_fire():
+    assert classify_fire((1, 14, 0), C.BUILDINGS) == C.SUBTYPE_GROUND
+    assert classify_fire((12.4, 19.5, 6.5), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((23.7, 19.5, 0.75), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((16, 12, 1.0), C.BUILDINGS) == C.SUBTYPE_INDOOR

@@ -1,0 +1,204 @@
+"""Agent framework with a fake backend: dispatch, busy rejection, preemption, sub-tasks, bad goals."""
+import math
+import threading
+import time
+from types import SimpleNamespace
+
+import pytest
+
+import smach  # noqa: F401,E402  (the workspace's smach, pure Python)
+
+from fake_backend import FakeBackend  # noqa: E402
+from mbzirc_agents import constants as C  # noqa: E402
+from mbzirc_agents.framework import Agent, AgentInterface, AgentTask, TaskError  # noqa: E402
+
+
+class Result(SimpleNamespace):
+    def __init__(self):
+        super().__init__(message='', value=0.0)
+
+
+class Feedback(SimpleNamespace):
+    def __init__(self):
+        super().__init__(state='', message='')
+
+
+class Count(AgentTask):
+    """Counts to ud.n (one step per 20 ms); publishes feedback; preemptable."""
+    INPUT_KEYS = ['n']
+
+    def run(self, ud):
+        for i in range(ud.n):
+            self.check_preempt()
+            self.feedback('COUNTING', f'{i}/{ud.n}')
+            time.sleep(0.02)
+        self.result['value'] = float(ud.n)
+        self.result['message'] = f'counted to {ud.n}'
+        return C.SUCCESS
+
+
+class Fail(AgentTask):
+    def run(self, ud):
+        raise TaskError('it went wrong')
+
+
+class Crash(AgentTask):
+    def run(self, ud):
+        return 1 / 0
+
+
+class Parent(AgentTask):
+    """Runs sub-task 'count' twice."""
+    INPUT_KEYS = ['n']
+
+    def run(self, ud):
+        total = 0
+        for _ in range(2):
+            if self.call_task('count', {'n': ud.n}) != C.SUCCESS:
+                raise TaskError('sub-task failed')
+            total += self.last_sub_result['value']
+        self.result['value'] = total
+        return C.SUCCESS
+
+
+def gen_n(goal, agent):
+    if not math.isfinite(goal.n) or goal.n < 0:
+        raise ValueError(f'n must be a finite number >= 0, got {goal.n}')
+    return {'n': int(goal.n)}
+
+
+class SafeAgent(Agent):
+    def __init__(self, backend):
+        super().__init__('7', backend)
+        self.safe_stops = 0
+
+    def safe_stop(self):
+        self.safe_stops += 1
+
+
+@pytest.fixture
+def agent():
+    be = FakeBackend()
+    a = SafeAgent(be)
+    a.add_task('count', Count, object(), gen_n, Result, Feedback)
+    a.add_task('fail', Fail, object(), lambda g, a: {}, Result, Feedback)
+    a.add_task('crash', Crash, object(), lambda g, a: {}, Result, Feedback)
+    a.add_task('parent', Parent, object(), gen_n, Result, Feedback)
+    a.add_sub_task('count', 'parent', Count)
+    a.start()
+    yield a
+    be.shutdown = True
+    a.shutdown()
+
+
+def goal(n):
+    return SimpleNamespace(n=n)
+
+
+def test_state_machine_structure(agent):
+    assert set(agent.sm.get_children()) == {C.DEFAULT_STATE, 'count', 'fail', 'crash', 'parent'}
+
+
+def test_task_succeeds_with_result_and_feedback(agent):
+    s = agent.backend.servers['count_action']
+    s.send(goal(3))
+    assert s.wait() == 'succeeded'
+    assert s.result.value == 3.0 and s.result.message == 'counted to 3'
+    assert [f.message for f in s.feedback] == ['0/3', '1/3', '2/3']
+    assert agent.running_task() == ''
+
+
+def test_error_and_exception_abort_with_message_and_safe_stop(agent):
+    f = agent.backend.servers['fail_action']
+    f.send(goal(0))
+    assert f.wait() == 'aborted' and f.result.message == 'it went wrong'
+    c = agent.backend.servers['crash_action']
+    c.send(goal(0))
+    assert c.wait() == 'aborted' and 'ZeroDivisionError' in c.result.message
+    assert agent.safe_stops == 2
+    s = agent.backend.servers['count_action']         # the agent still works
+    s.send(goal(1))
+    assert s.wait() == 'succeeded'
+
+
+def test_bad_goal_aborted_with_message(agent):
+    s = agent.backend.servers['count_action']
+    s.send(goal(float('nan')))
+    assert s.wait() == 'aborted' and 'bad goal' in s.result.message and 'finite' in s.result.message
+
+
+def test_busy_agent_rejects_other_task(agent):
+    s = agent.backend.servers['count_action']
+    s.send(goal(50))
+    time.sleep(0.2)
+    f = agent.backend.servers['fail_action']
+    f.send(goal(0))
+    assert f.wait() == 'aborted' and 'busy' in f.result.message and 'count' in f.result.message
+    s.preempt = True
+    assert s.wait() == 'preempted'
+
+
+def test_preemption_stops_task_safely_and_agent_recovers(agent):
+    s = agent.backend.servers['count_action']
+    s.send(goal(500))
+    time.sleep(0.2)
+    t0 = time.monotonic()
+    s.preempt = True
+    assert s.wait() == 'preempted'
+    assert time.monotonic() - t0 < 1.0
+    assert agent.safe_stops == 1
+    s.send(goal(2))
+    assert s.wait() == 'succeeded'
+
+
+def test_sub_tasks_and_their_preemption(agent):
+    p = agent.backend.servers['parent_action']
+    p.send(goal(3))
+    assert p.wait() == 'succeeded' and p.result.value == 6.0
+    p.send(goal(500))
+    time.sleep(0.2)
+    p.preempt = True
+    assert p.wait() == 'preempted'
+
+
+def test_agent_preempt_with_reason_aborts(agent):
+    s = agent.backend.servers['count_action']
+    s.send(goal(500))
+    time.sleep(0.2)
+    assert agent.preempt_running('central unit heartbeat lost') == 'count'
+    assert s.wait() == 'aborted' and 'heartbeat' in s.result.message
+
+
+def test_not_accepting(agent):
+    agent.accepting, agent.reject_reason = False, 'central unit heartbeat lost'
+    s = agent.backend.servers['count_action']
+    s.send(goal(1))
+    assert s.wait() == 'aborted' and 'heartbeat' in s.result.message
+
+
+def test_interface_dispatch_to_active_tasks_and_default_service():
+    be = FakeBackend()
+    iface = AgentInterface(be)
+    got = []
+    iface.add_subscriber('a', 'topic', str, lambda m: got.append(('a', m)))
+    iface.add_subscriber('b', 'topic', str, lambda m: got.append(('b', m)))
+    iface.add_subscriber(None, 'topic', str, lambda m: got.append(('always', m)))
+    be.subs['topic']('m1')
+    iface.push_active('a')
+    be.subs['topic']('m2')
+    iface.pop_active('a')
+    assert got == [('always', 'm1'), ('always', 'm2'), ('a', 'm2')]
+    iface.add_service_server('a', 'srv', object, lambda r: 'from a', default_callback=lambda r: 'default')
+    assert be.services['srv']('req') == 'default'
+    iface.push_active('a')
+    assert be.services['srv']('req') == 'from a'
+    with pytest.raises(TypeError):
+        iface.add_subscriber('c', 'topic', int, print)
+
+
+def test_bad_callback_is_logged_not_raised():
+    be = FakeBackend()
+    iface = AgentInterface(be)
+    iface.add_subscriber(None, 't', str, lambda m: 1 / 0)
+    be.subs['t']('x')
+    assert be.errors and 'ZeroDivisionError' in be.errors[0]

@@ -1,0 +1,172 @@
+"""UAV tasks against a fake kinematic UAL (no ROS): take-off, regions, preemption, bad goals."""
+import math
+import time
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs.msg import GoToGoal, Object, ObjectList, TakeOffGoal, ExtinguishFacadeFireGoal, LandGoal
+
+from fake_backend import FakeBackend
+from fake_ual import FakeUal
+from mbzirc_agents import constants as C
+from mbzirc_agents.uav_agent import UavAgent
+
+
+@pytest.fixture
+def uav():
+    be = FakeBackend()
+    agent = UavAgent('2', be, {'region_timeout': 5.0})
+    ual = FakeUal(be)
+    agent.start()
+    deadline = time.monotonic() + 2
+    while agent.pose is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    yield agent, ual, be
+    be.shutdown = True
+    ual.stop = True
+    agent.shutdown()
+
+
+def pose(x, y, z, yaw=None, frame='arena'):
+    p = PoseStamped()
+    p.header.frame_id = frame
+    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
+    if yaw is not None:
+        p.pose.orientation.z, p.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    return p
+
+
+def take_off(be, h=3.0):
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=h))
+    return s.wait(10)
+
+
+def test_task_set_and_servers(uav):
+    agent, _, be = uav
+    assert set(be.servers) == {f'{n}_action' for n in (
+        'take_off', 'land', 'go_to', 'follow_path', 'hover', 'search_facade', 'go_to_facade_fire',
+        'extinguish_facade_fire', 'look_for_ground_fires', 'extinguish_ground_fire', 'enter_building',
+        'search_indoor', 'extinguish_indoor_fire', 'go_home_and_refill')}
+
+
+def test_take_off_reserves_column_then_holds(uav):
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    assert ual.state == 4 and ual.pos[2] == pytest.approx(3.0, abs=0.3)
+    regions = ual.regions.regions()
+    assert ('2', 'hold') in regions and ('2', 'take_off') not in regions
+
+
+def test_take_off_bad_height(uav):
+    _, _, be = uav
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=float('nan')))
+    assert s.wait() == 'aborted' and 'height' in s.result.message
+
+
+def test_go_to_waits_for_region_of_another_agent(uav):
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    assert ual.regions.ask('3', 'hold', (4, -1, 2), (6, 1, 4))[0]      # another UAV on the way
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(10, 0, 3)))
+    time.sleep(1.0)
+    assert any(f.state == 'WAITING_REGION' for f in s.feedback)
+    assert np.linalg.norm(ual.pos[:2]) < 0.1                            # did not move
+    ual.regions.free('3', 'hold')
+    assert s.wait(10) == 'succeeded'
+    assert ual.pos == pytest.approx([10, 0, 3], abs=0.35)
+    assert ('2', 'go_to') not in ual.regions.regions()
+
+
+def test_go_to_around_the_building_never_crosses_it(uav):
+    agent, ual, be = uav
+    assert take_off(be, 3.0) == 'succeeded'
+    ual.waypoints.clear()
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(30, 24, 3)))     # beyond the tower's far corner
+    assert s.wait(20) == 'succeeded'
+    from mbzirc_agents.geometry import _segment_hits_rect
+    pts = [np.zeros(2)] + [w[0][:2] for w in ual.waypoints]
+    assert len(pts) > 2
+    for a, b in zip(pts[:-1], pts[1:]):
+        for bld in C.BUILDINGS:
+            assert not _segment_hits_rect(a, b, bld[:4])
+
+
+@pytest.mark.parametrize('goal,words', [(pose(float('nan'), 0, 3), 'NaN'), (pose(500, 0, 3), 'outside'),
+                                        (pose(1, 1, 3, frame='map'), 'frame')])
+def test_go_to_bad_goals(uav, goal, words):
+    _, _, be = uav
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=goal))
+    assert s.wait() == 'aborted' and words in s.result.message
+
+
+def test_preempted_go_to_stops_the_uav(uav):
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    time.sleep(1.0)
+    s.preempt = True
+    assert s.wait(5) == 'preempted'
+    time.sleep(0.2)
+    p1 = ual.pos.copy()
+    time.sleep(0.5)
+    assert np.linalg.norm(ual.pos - p1) < 0.05
+    assert np.linalg.norm(ual.pos[:2]) > 1.0 and np.linalg.norm(ual.pos[:2] - [-15, 30]) > 5
+
+
+def test_unknown_fire_id_aborted(uav):
+    agent, _, be = uav
+    s = be.servers['extinguish_facade_fire_action']
+    s.send(ExtinguishFacadeFireGoal(fire_id=42))
+    assert s.wait() == 'aborted' and 'unknown fire id 42' in s.result.message
+    o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_GROUND, status=C.STATUS_ACTIVE)
+    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+    s.send(ExtinguishFacadeFireGoal(fire_id=7))
+    assert s.wait() == 'aborted' and 'ground fire' in s.result.message
+
+
+def test_land_frees_regions(uav):
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    s = be.servers['land_action']
+    s.send(LandGoal())
+    assert s.wait(10) == 'succeeded'
+    assert ual.state == 1 and ual.regions.regions() == {}
+
+
+def test_data_feed_and_cost(uav):
+    agent, ual, be = uav
+    feed = agent.data_feed()
+    assert feed.agent_id == '2' and feed.robot_type == 'uav' and feed.is_idle
+    from mbzirc_comm_objs.srv import GetCostToGoToRequest
+    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=pose(3, 4, 0))).cost == \
+        pytest.approx(5.0, abs=0.01)
+    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=pose(float('nan'), 4, 0))).cost == -1
+
+
+def test_heartbeat_loss_aborts_task_and_rejects_goals(uav):
+    agent, ual, be = uav
+    agent.watchdog.timeout = 0.3
+    agent.watchdog.return_home_timeout = 100
+    agent._on_heartbeat(None)
+    assert take_off(be) == 'succeeded'
+    agent._on_heartbeat(None)
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    time.sleep(0.2)
+    for _ in range(10):          # the node's 10 Hz timer
+        agent._on_timer()
+        time.sleep(0.1)
+    assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
+    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
+    agent._on_heartbeat(None)
+    agent._on_timer()
+    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    assert s.wait(10) == 'succeeded'

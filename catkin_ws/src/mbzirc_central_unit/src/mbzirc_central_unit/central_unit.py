@@ -1,0 +1,280 @@
+"""ROS adapter of the strategy: data_feeds and /estimated_objects in, action goals out, heartbeat, status.
+
+The node holds no mission state of its own beyond the goals it has in flight: every tick it rebuilds the
+`WorldView` from the latest messages and asks `Strategy.decide` what idle agents do next. A restarted node
+therefore resumes from the agents' data_feeds and the estimator's tracks.
+"""
+from __future__ import annotations
+
+import json
+import math
+import threading
+from typing import Any, Optional
+
+import actionlib
+import rospy
+import yaml
+from actionlib_msgs.msg import GoalStatus
+from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs import msg as cmsg
+from std_msgs.msg import Header, String
+
+from . import constants as C
+from .layout import Layout, load_world
+from .strategy import Command, Strategy, StrategyParams
+from .world_model import AgentView, FireView, WorldView, classify_fire
+
+ACTION_TYPES = {
+    C.TAKE_OFF: "TakeOff", C.LAND: "Land", C.GO_TO: "GoTo", C.FOLLOW_PATH: "FollowPath", C.HOVER: "Hover",
+    C.SEARCH_FACADE: "SearchFacade", C.GO_TO_FACADE_FIRE: "GoToFacadeFire",
+    C.EXTINGUISH_FACADE_FIRE: "ExtinguishFacadeFire", C.LOOK_FOR_GROUND_FIRES: "LookForGroundFires",
+    C.EXTINGUISH_GROUND_FIRE: "ExtinguishGroundFire", C.ENTER_BUILDING: "EnterBuilding",
+    C.SEARCH_INDOOR: "SearchIndoor", C.EXTINGUISH_INDOOR_FIRE: "ExtinguishIndoorFire",
+    C.GO_HOME_AND_REFILL: "GoHomeAndRefill",
+}
+FRAME = "arena"
+
+
+def _finite(*vals: float) -> bool:
+    return all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals)
+
+
+def pose_msg(p: tuple, stamp: rospy.Time) -> PoseStamped:
+    """(x, y, z, yaw) -> PoseStamped in the arena frame."""
+    m = PoseStamped()
+    m.header.frame_id = FRAME
+    m.header.stamp = stamp
+    m.pose.position.x, m.pose.position.y, m.pose.position.z = float(p[0]), float(p[1]), float(p[2])
+    yaw = float(p[3]) if len(p) > 3 else 0.0
+    m.pose.orientation.z, m.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    return m
+
+
+def goal_msg(cmd: Command, stamp: rospy.Time) -> Any:
+    """Action goal of a command: tuples become PoseStamped, lists of tuples PoseStamped[]."""
+    goal = getattr(cmsg, ACTION_TYPES[cmd.task] + "Goal")()
+    for key, val in cmd.goal.items():
+        if key.startswith("_"):
+            continue
+        if isinstance(val, list):
+            val = [pose_msg(p, stamp) for p in val]
+        elif isinstance(val, tuple):
+            val = pose_msg(val, stamp)
+        setattr(goal, key, val)
+    return goal
+
+
+def result_dict(result: Any) -> dict[str, Any]:
+    """The fields of an action result we use, whatever the action type."""
+    if result is None:
+        return {}
+    out = {}
+    for k in ("message", "extinguished", "water_left", "water_level", "has_blanket"):
+        if hasattr(result, k):
+            out[k] = getattr(result, k)
+    if hasattr(result, "fire_ids"):
+        out["fire_ids"] = list(result.fire_ids)
+    return out
+
+
+class CentralUnit:
+    """Action client of every agent, running the Challenge 3 strategy.
+
+    Args (all `~` params): see the package README.
+    """
+
+    def __init__(self) -> None:
+        self.agent_ids = self._agent_ids()
+        params = StrategyParams(
+            agent_timeout=float(rospy.get_param("~agent_timeout", C.AGENT_TIMEOUT)),
+            floor_priority=[int(f) for f in rospy.get_param("~floor_priority", list(C.FLOOR_PRIORITY))],
+            indoor_floors=[int(f) for f in rospy.get_param("~indoor_floors", list(C.INDOOR_FLOORS))],
+            altitudes={str(k): float(v) for k, v in
+                       rospy.get_param("~altitudes", dict(C.DEFAULT_ALTITUDES)).items()},
+            layout=self._layout(str(rospy.get_param("~world_file", ""))),
+            fire_distance=float(rospy.get_param("~fire_distance", C.FIRE_DISTANCE)),
+            min_water=float(rospy.get_param("~min_water", C.MIN_WATER)),
+            num_ground_fires=int(rospy.get_param("~num_ground_fires", 2)),
+            facade_searches=int(rospy.get_param("~searches", 2)),
+            second_search_first=bool(rospy.get_param("~second_search_first", True)),
+            max_failures=int(rospy.get_param("~max_failures", C.MAX_TASK_FAILURES)),
+        )
+        self.strategy = Strategy(params)
+        self.lock = threading.Lock()
+        self.agents: dict[str, AgentView] = {}
+        self.fires: dict[int, FireView] = {}
+        self.clients: dict[tuple[str, str], actionlib.SimpleActionClient] = {}
+        self.results: list[tuple[Command, int, dict]] = []
+        self.feedback: dict[str, str] = {}
+        self.silent: set[str] = set()
+        self.heartbeat_pub = rospy.Publisher("/central_unit/heartbeat", Header, queue_size=1)
+        self.status_pub = rospy.Publisher("/central_unit/status", String, queue_size=1, latch=True)
+        self.subs = [rospy.Subscriber(f"/{C.robot_ns(i)}/data_feed", cmsg.AgentDataFeed, self._on_feed,
+                                      callback_args=i, queue_size=1) for i in self.agent_ids]
+        self.subs.append(rospy.Subscriber("/estimated_objects", cmsg.ObjectList, self._on_objects, queue_size=1))
+        self.seq = 0
+        self.hb_timer = rospy.Timer(rospy.Duration(1.0 / float(rospy.get_param("~heartbeat_rate", 2.0))),
+                                    self._heartbeat)
+        self.tick_timer = rospy.Timer(rospy.Duration(1.0 / float(rospy.get_param("~rate", 2.0))), self._tick)
+        rospy.on_shutdown(self._shutdown)
+        rospy.loginfo("central_unit: agents %s, layout with %d facade holders, %d rooms",
+                      self.agent_ids, len(params.layout.facade_holders),
+                      sum(len(r) for r in params.layout.rooms.values()))
+
+    # ---- params ----------------------------------------------------------------------------------
+    @staticmethod
+    def _agent_ids() -> list[str]:
+        ids = rospy.get_param("~agents", None)
+        if ids:
+            return [str(i) for i in ids]
+        uavs = int(rospy.get_param("~uavs", 3))
+        out = [str(i) for i in range(1, uavs + 1)]
+        if bool(rospy.get_param("~ugv", True)):
+            out.insert(0, C.UGV_ID)
+        return out
+
+    @staticmethod
+    def _layout(path: str) -> Layout:
+        if not path:
+            return Layout()
+        try:
+            with open(path, encoding="utf-8") as f:
+                return load_world(yaml.safe_load(f))
+        except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as e:
+            rospy.logerr("central_unit: cannot read world file %s (%s): using the default layout", path, e)
+            return Layout()
+
+    # ---- inputs ----------------------------------------------------------------------------------
+    def _on_feed(self, msg: cmsg.AgentDataFeed, agent_id: str) -> None:
+        p = msg.pose.pose.position
+        now = rospy.get_time()
+        with self.lock:
+            a = self.agents.get(agent_id) or AgentView(agent_id)
+            a.last_seen = now
+            if not _finite(p.x, p.y, p.z):
+                rospy.logerr_throttle(5.0, f"central_unit: data_feed of {agent_id} has a non-finite pose: ignored")
+            else:
+                a.x, a.y, a.z = p.x, p.y, p.z
+            a.robot_type = msg.robot_type or (C.ROBOT_UGV if agent_id == C.UGV_ID else C.ROBOT_UAV)
+            a.payload = msg.payload or a.payload
+            a.ual_state = msg.ual_state
+            a.active_task = msg.active_task
+            a.active_sub_state = msg.active_sub_state
+            a.is_idle = msg.is_idle
+            a.battery = msg.battery if _finite(msg.battery) else a.battery
+            a.water_level = msg.water_level if _finite(msg.water_level) else 0.0
+            a.has_blanket = msg.has_blanket
+            self.agents[agent_id] = a
+
+    def _on_objects(self, msg: cmsg.ObjectList) -> None:
+        fires: dict[int, FireView] = {}
+        for o in msg.objects:
+            if o.type != C.TYPE_FIRE:
+                continue
+            p = o.pose.pose.position
+            if not _finite(p.x, p.y, p.z):
+                rospy.logerr_throttle(5.0, f"central_unit: estimated object {o.id} has a non-finite pose: ignored")
+                continue
+            fires[o.id] = FireView(o.id, p.x, p.y, p.z, classify_fire(o.sub_type, p.x, p.y, p.z), o.status)
+        with self.lock:
+            self.fires = fires
+
+    # ---- outputs ---------------------------------------------------------------------------------
+    def _heartbeat(self, _event: Any) -> None:
+        self.seq += 1
+        h = Header(seq=self.seq, stamp=rospy.Time.now(), frame_id="central_unit")
+        self.heartbeat_pub.publish(h)
+
+    def _client(self, agent_id: str, task: str) -> actionlib.SimpleActionClient:
+        key = (agent_id, task)
+        if key not in self.clients:
+            action = getattr(cmsg, ACTION_TYPES[task] + "Action")
+            self.clients[key] = actionlib.SimpleActionClient(f"/{C.robot_ns(agent_id)}/{task}_action", action)
+        return self.clients[key]
+
+    def _send(self, cmd: Command) -> None:
+        client = self._client(cmd.agent_id, cmd.task)
+        if not client.wait_for_server(rospy.Duration(0.05)):
+            rospy.logwarn_throttle(10.0, f"central_unit: {cmd.agent_id}/{cmd.task}_action not available yet")
+            self.strategy.forget(cmd)
+            return
+        goal = goal_msg(cmd, rospy.Time.now())
+
+        def done(status: int, result: Any, cmd: Command = cmd) -> None:
+            with self.lock:
+                self.results.append((cmd, status, result_dict(result)))
+
+        def feedback(fb: Any, agent_id: str = cmd.agent_id) -> None:
+            self.feedback[agent_id] = getattr(fb, "message", "") or getattr(fb, "state", "")
+
+        client.send_goal(goal, done_cb=done, feedback_cb=feedback)
+        rospy.loginfo(f"central_unit: {cmd.agent_id} <- {cmd.describe()}")
+
+    # ---- the loop --------------------------------------------------------------------------------
+    def _tick(self, _event: Any) -> None:
+        try:
+            self._step()
+        except Exception as e:  # noqa: BLE001 - the mission must go on; say what broke
+            rospy.logerr_throttle(5.0, f"central_unit: tick failed: {type(e).__name__}: {e}")
+
+    def _step(self) -> None:
+        now = rospy.get_time()
+        with self.lock:
+            results, self.results = self.results, []
+            world = WorldView(now, {k: AgentView(**vars(v)) for k, v in self.agents.items()}, dict(self.fires))
+        for cmd, status, res in results:
+            if self.strategy.in_flight.get(cmd.agent_id) is not cmd:
+                continue  # a goal we gave up (silent agent)
+            ok = status == GoalStatus.SUCCEEDED
+            busy = str(res.get("message", "")).startswith("busy")
+            if busy:
+                self.strategy.in_flight.pop(cmd.agent_id, None)
+            else:
+                self.strategy.on_result(cmd, ok, res)
+            level = rospy.loginfo if ok else rospy.logwarn
+            level(f"central_unit: {cmd.agent_id} {cmd.task} -> {GoalStatus.to_string(status)} "
+                  f"{res.get('message', '')}")
+        for agent_id in self.agent_ids:
+            a = world.agents.get(agent_id)
+            alive = a is not None and a.alive(now, self.strategy.p.agent_timeout)
+            if not alive and agent_id not in self.silent and a is not None:
+                rospy.logwarn(f"central_unit: agent {agent_id} silent: its work is reassigned")
+                self.silent.add(agent_id)
+                cmd = self.strategy.in_flight.get(agent_id)
+                if cmd is not None:
+                    self._client(agent_id, cmd.task).cancel_goal()
+                self.strategy.on_silent(agent_id)
+            elif alive and agent_id in self.silent:
+                rospy.loginfo(f"central_unit: agent {agent_id} is back")
+                self.silent.discard(agent_id)
+        for cmd in self.strategy.decide(world):
+            self._send(cmd)
+        self._publish_status(world)
+
+    def _publish_status(self, world: WorldView) -> None:
+        agents = {}
+        for i in self.agent_ids:
+            a = world.agents.get(i)
+            cmd = self.strategy.in_flight.get(i)
+            agents[i] = {
+                "alive": bool(a and a.alive(world.now, self.strategy.p.agent_timeout)),
+                "task": cmd.task if cmd else (a.active_task if a else ""),
+                "doing": (cmd.reason if cmd else "idle"),
+                "feedback": self.feedback.get(i, ""),
+                "water": round(a.water_level, 2) if a else 0.0,
+                "pos": [round(v, 1) for v in a.position] if a else None,
+            }
+        fires = [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "status": f.status}
+                 for f in world.fires.values()]
+        self.status_pub.publish(String(json.dumps({"t": round(world.now, 1), "agents": agents, "fires": fires,
+                                                   "floor_owner": self.strategy.floor_owner,
+                                                   "indoor_owner": self.strategy.indoor_owner})))
+
+    def _shutdown(self) -> None:
+        for t in (self.tick_timer, self.hb_timer):
+            t.shutdown()
+        for cmd in list(self.strategy.in_flight.values()):
+            try:
+                self._client(cmd.agent_id, cmd.task).cancel_goal()
+            except Exception:  # noqa: BLE001 - shutting down anyway
+                pass

@@ -1,0 +1,143 @@
+"""The referee's bookkeeping (pure): what happened in a trial, and the summary.json it ends with.
+
+The mission recorder feeds it ground truth (/sim/fires, /sim/score) and robot tracks; nothing here feeds
+back to the strategy.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+KIND_NAMES = {0: "facade", 1: "ground", 2: "indoor"}  # ual_sim/FireState kind constants
+SUMMARY_KEYS = ("seed", "sim_time_s", "wall_time_s", "real_time_factor", "score", "fires_extinguished",
+                "fires_total", "crashes", "fires")
+FIRE_KEYS = ("id", "kind", "floor", "extinguished_by", "t_extinguished")
+
+
+@dataclass
+class FireRecord:
+    """One active fire of the trial as the referee sees it."""
+    fire_id: str
+    kind: str
+    floor: int
+    position: tuple[float, float, float]
+    progress: float = 0.0
+    extinguished: bool = False
+    t_extinguished: Optional[float] = None
+    extinguished_by: Optional[str] = None
+
+
+@dataclass
+class MissionRecord:
+    """Everything the report needs, updated as ground truth arrives.
+
+    Args:
+        seed: seed of the trial (written as is).
+        duration: trial length in sim seconds (20 minutes).
+    """
+    seed: int = 0
+    duration: float = 1200.0
+    fires: dict[str, FireRecord] = field(default_factory=dict)
+    score: float = 0.0
+    score_history: list[tuple[float, float]] = field(default_factory=list)
+    tracks: dict[str, list[tuple[float, float, float, float]]] = field(default_factory=dict)
+    crashes: list[str] = field(default_factory=list)
+    min_separation: float = math.inf
+    elapsed: float = 0.0
+    robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
+
+    def update_fire(self, fire_id: str, kind: int, floor: int, position: tuple[float, float, float],
+                    active: bool, extinguished: bool, progress: float, t_ext: float) -> None:
+        """Record one ground-truth fire state (inactive holders are not fires of the trial)."""
+        if not active:
+            return
+        rec = self.fires.get(fire_id)
+        if rec is None:
+            rec = self.fires[fire_id] = FireRecord(fire_id, KIND_NAMES.get(kind, "unknown"), int(floor), position)
+        rec.progress = float(progress)
+        if extinguished and not rec.extinguished:
+            rec.extinguished = True
+            rec.t_extinguished = float(t_ext) if t_ext >= 0 else self.elapsed
+            rec.extinguished_by = self.nearest_robot(rec.position, rec.kind)
+
+    def add_pose(self, robot: str, t: float, x: float, y: float, z: float, min_dt: float = 0.5) -> None:
+        """Append to a robot's track (at most one point per `min_dt`) and track the closest approach."""
+        tr = self.tracks.setdefault(robot, [])
+        if tr and t - tr[-1][0] < min_dt:
+            return
+        tr.append((t, x, y, z))
+        for other, otr in self.tracks.items():
+            if other != robot and otr and abs(otr[-1][0] - t) <= 1.0 and max(z, otr[-1][3]) > 0.3:
+                self.min_separation = min(self.min_separation, math.dist((x, y, z), otr[-1][1:]))
+
+    def nearest_robot(self, p: tuple[float, float, float], kind: str) -> Optional[str]:
+        """The robot closest to p now: who put the fire out (blanket robots for ground fires)."""
+        best = None
+        for robot, tr in self.tracks.items():
+            if not tr:
+                continue
+            rk = self.robot_kinds.get(robot, "")
+            if kind == "ground" and rk and rk != "blanket":
+                continue
+            if kind != "ground" and rk == "blanket":
+                continue
+            d = math.dist(p, tr[-1][1:])
+            if best is None or d < best[0]:
+                best = (d, robot)
+        return best[1] if best else None
+
+    def set_score(self, t: float, score: float, crashed: list[str]) -> None:
+        self.elapsed = max(self.elapsed, t)
+        if not self.score_history or abs(score - self.score) > 1e-6 or t - self.score_history[-1][0] >= 5.0:
+            self.score_history.append((t, score))
+        self.score = score
+        for c in crashed:
+            if c not in self.crashes:
+                self.crashes.append(c)
+
+    def all_out(self) -> bool:
+        """True when every active fire of the trial is out (and some fire is known)."""
+        return bool(self.fires) and all(f.extinguished for f in self.fires.values())
+
+    def finished(self, expected_fires: int = 0) -> Optional[str]:
+        """Why the trial is over, or None: time is up, or every fire is out."""
+        if self.elapsed >= self.duration:
+            return "time"
+        if self.all_out() and len(self.fires) >= expected_fires:
+            return "all_fires_out"
+        return None
+
+    def summary(self, wall_time: float, end_reason: str = "", extra: Optional[dict[str, Any]] = None) -> dict:
+        """The summary.json object."""
+        fires = sorted(self.fires.values(), key=lambda f: (f.kind, f.floor, f.fire_id))
+        times = [f.t_extinguished for f in fires if f.extinguished and f.t_extinguished is not None]
+        out = {
+            "seed": self.seed,
+            "sim_time_s": round(self.elapsed, 2),
+            "wall_time_s": round(wall_time, 2),
+            "real_time_factor": round(self.elapsed / wall_time, 3) if wall_time > 0 else None,
+            "score": round(self.score, 3),
+            "fires_extinguished": sum(1 for f in fires if f.extinguished),
+            "fires_total": len(fires),
+            "crashes": list(self.crashes),
+            "all_out_time_s": round(max(times), 2) if self.all_out() and times else None,
+            "min_separation_m": round(self.min_separation, 3) if math.isfinite(self.min_separation) else None,
+            "end_reason": end_reason,
+            "fires": [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "extinguished_by": f.extinguished_by,
+                       "t_extinguished": None if f.t_extinguished is None else round(f.t_extinguished, 2),
+                       "progress": round(f.progress, 3), "position": [round(v, 2) for v in f.position]}
+                      for f in fires],
+        }
+        out.update(extra or {})
+        return out
+
+
+def check_summary(s: dict) -> list[str]:
+    """What a summary.json lacks (empty when complete); used by the mission test and the benchmark."""
+    missing = [k for k in SUMMARY_KEYS if k not in s]
+    for i, f in enumerate(s.get("fires", [])):
+        missing += [f"fires[{i}].{k}" for k in FIRE_KEYS if k not in f]
+        if f.get("kind") not in ("ground", "facade", "indoor"):
+            missing.append(f"fires[{i}].kind={f.get('kind')}")
+    return missing

@@ -1,0 +1,115 @@
+"""What the central unit knows, rebuilt at every tick from the agents' data_feeds and /estimated_objects.
+
+Nothing here is only in memory: a restarted central unit rebuilds the same views from the next messages.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional
+
+from . import constants as C
+from .geometry import floor_of, inside
+
+
+@dataclass
+class AgentView:
+    """One agent as its last data_feed describes it.
+
+    Args:
+        agent_id: "0" for the UGV, "1".. for the UAVs.
+        last_seen: time (s) of the last data_feed; the agent is silent when older than the timeout.
+    """
+    agent_id: str
+    robot_type: str = C.ROBOT_UAV
+    payload: str = C.PAYLOAD_WATER
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    ual_state: int = C.UAL_UNINITIALIZED
+    active_task: str = ""
+    active_sub_state: str = ""
+    is_idle: bool = True
+    battery: float = 1.0
+    water_level: float = 0.0
+    has_blanket: bool = False
+    last_seen: float = -math.inf
+
+    @property
+    def position(self) -> tuple[float, float, float]:
+        return (self.x, self.y, self.z)
+
+    @property
+    def is_uav(self) -> bool:
+        return self.robot_type != C.ROBOT_UGV
+
+    @property
+    def landed(self) -> bool:
+        return self.ual_state in C.UAL_LANDED or (self.ual_state == C.UAL_LANDING)
+
+    def alive(self, now: float, timeout: float) -> bool:
+        """True while data_feeds keep coming (the data_feed is the agent's heartbeat)."""
+        return now - self.last_seen <= timeout
+
+
+@dataclass
+class FireView:
+    """A fire track of the object estimator, with its kind and floor worked out."""
+    fire_id: int
+    x: float
+    y: float
+    z: float
+    kind: str
+    status: int = C.STATUS_ACTIVE
+
+    @property
+    def floor(self) -> int:
+        return floor_of(self.z)
+
+    @property
+    def position(self) -> tuple[float, float, float]:
+        return (self.x, self.y, self.z)
+
+    @property
+    def extinguished(self) -> bool:
+        return self.status == C.STATUS_EXTINGUISHED
+
+    @property
+    def actionable(self) -> bool:
+        """A fire worth sending a robot to: tracked and not out (a LOST or INACTIVE track is not)."""
+        return self.status in (C.STATUS_ACTIVE, C.STATUS_DETECTED)
+
+
+def classify_fire(sub_type: int, x: float, y: float, z: float) -> str:
+    """Kind of a fire: the estimator's sub_type when it knows it, else from where the fire is
+    (well inside a building box: indoor; on or near a wall: facade; elsewhere: ground)."""
+    by_subtype = {C.SUBTYPE_FACADE: C.KIND_FACADE, C.SUBTYPE_GROUND: C.KIND_GROUND,
+                  C.SUBTYPE_INDOOR: C.KIND_INDOOR}
+    if sub_type in by_subtype:
+        return by_subtype[sub_type]
+    for b in C.BUILDING_BOXES:
+        if z < b[5] and inside((x, y), (b[0] + 0.6, b[1] + 0.6, b[3] - 0.6, b[4] - 0.6)):
+            return C.KIND_INDOOR
+    for b in C.BUILDING_BOXES:
+        if z < b[5] + 1.0 and inside((x, y), (b[0] - 1.5, b[1] - 1.5, b[3] + 1.5, b[4] + 1.5)):
+            return C.KIND_FACADE
+    return C.KIND_GROUND
+
+
+@dataclass
+class WorldView:
+    """Snapshot the strategy decides on."""
+    now: float
+    agents: dict[str, AgentView] = field(default_factory=dict)
+    fires: dict[int, FireView] = field(default_factory=dict)
+
+    def fires_of(self, kind: str, floor: Optional[int] = None, actionable: bool = True) -> list[FireView]:
+        """Fires of a kind (and floor), only actionable ones by default, in id order."""
+        out = [f for f in self.fires.values() if f.kind == kind and (floor is None or f.floor == floor)]
+        if actionable:
+            out = [f for f in out if f.actionable]
+        return sorted(out, key=lambda f: f.fire_id)
+
+    def extinguished_on(self, kind: str, floor: Optional[int] = None) -> bool:
+        """True if a fire of that kind (and floor) is known to be out."""
+        return any(f.extinguished for f in self.fires_of(kind, floor, actionable=False))

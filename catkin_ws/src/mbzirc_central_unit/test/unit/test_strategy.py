@@ -1,0 +1,238 @@
+"""The C3 strategy: assignment, refill and reassignment, first floor last, silent agents, restart."""
+import math
+
+from fake_mission import FakeMission, TRUE_FIRES
+
+from mbzirc_central_unit import constants as C
+from mbzirc_central_unit import geometry as G
+from mbzirc_central_unit.strategy import Strategy, StrategyParams
+from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, classify_fire
+
+
+def _tasks(cmds):
+    return {c.agent_id: c.task for c in cmds}
+
+
+def test_first_tick_ugv_indoors_and_uavs_take_off_at_distinct_altitudes():
+    m = FakeMission()
+    cmds = m.strategy.decide(m.world())
+    assert _tasks(cmds) == {"0": C.SEARCH_INDOOR, "1": C.TAKE_OFF, "2": C.TAKE_OFF, "3": C.TAKE_OFF}
+    assert [c.goal["floor"] for c in cmds if c.agent_id == "0"] == [0]
+    heights = [c.goal["height"] for c in cmds if c.task == C.TAKE_OFF]
+    assert len(set(heights)) == 3
+
+
+def test_water_uavs_get_different_floors_first_floor_last():
+    m = FakeMission()
+    m.step()  # take-offs
+    cmds = {c.agent_id: c for c in m.step()}
+    floors = {cmds["2"].target[1], cmds["3"].target[1]}
+    assert cmds["2"].task == C.FOLLOW_PATH and cmds["3"].task == C.FOLLOW_PATH
+    assert floors == {2, 0}  # floor 1 (wind gusts) is nobody's first floor
+    assert m.strategy.floor_owner == {2: "2", 0: "3"}
+
+
+def test_transits_change_altitude_only_in_an_elevator_and_not_both_in_the_same():
+    m = FakeMission()
+    m.step()
+    used = {}
+    for c in m.step():
+        if c.task != C.FOLLOW_PATH:
+            continue
+        path = [p[:3] for p in c.goal["path"]]
+        vertical = [(p, q) for p, q in zip(path, path[1:]) if abs(p[2] - q[2]) > 1e-6]
+        assert vertical, "a transit to another floor must climb or descend somewhere"
+        elevators = G.elevator_points()
+        for p, q in vertical:
+            e = [i for i, xy in enumerate(elevators) if math.dist(p[:2], xy) < 1e-6 and math.dist(q[:2], xy) < 1e-6]
+            assert e == [c.goal["_elevator"]]
+        used[c.agent_id] = c.goal["_elevator"]
+    assert sorted(used.values()) == [0, 1]  # two UAVs in transit at once take different elevators
+
+
+def test_facade_search_starts_at_the_end_nearest_the_uav():
+    s = Strategy()
+    for start, expected_first in (((5.0, 25.0, 1.5), "C"), ((30.0, 25.0, 1.5), "A")):
+        a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *start, ual_state=C.UAL_FLYING_AUTO, water_level=2.0,
+                      last_seen=0.0)
+        s = Strategy(StrategyParams(floor_priority=(0,)))
+        cmd = s.decide(WorldView(0.0, {"2": a}, {}))[0]
+        first = cmd.goal["path"][-1]
+        holder = [h for h in C.FACADE_HOLDERS if G.floor_of(h[2]) == 0 and
+                  math.dist(G.viewpoint(h)[:3], first[:3]) < 1e-6][0]
+        assert G.facade_of(holder) == expected_first
+
+
+def test_whole_mission_puts_out_all_fires_with_refills():
+    m = FakeMission()
+    steps = m.run()
+    assert steps > 0, [f"{c.agent_id}:{c.task}" for c, _ in m.log[-20:]]
+    tasks = [c.task for c, _ in m.log]
+    assert tasks.count(C.GO_HOME_AND_REFILL) >= 2  # facade fires need 1.5 L with 1 L tanks; a new blanket
+    done_by = {c.target: c.agent_id for c, ok in m.log if c.task == C.EXTINGUISH_INDOOR_FIRE}
+    assert done_by[6] == "0"  # the UGV takes the ground floor indoors
+    assert {done_by[7], done_by[8]} <= {"2", "3"}
+
+
+def test_blanket_uav_gets_a_new_blanket_between_ground_fires():
+    m = FakeMission()
+    m.run()
+    seq = [c.task for c, _ in m.log if c.agent_id == "1"]
+    i = seq.index(C.EXTINGUISH_GROUND_FIRE)
+    j = seq.index(C.EXTINGUISH_GROUND_FIRE, i + 1)
+    assert C.GO_HOME_AND_REFILL in seq[i:j]
+
+
+def test_empty_tank_goes_home_through_elevator_and_releases_the_floor():
+    m = FakeMission()
+    m.step(); m.step()
+    a = m.agents["2"]
+    a.water_level = 0.0
+    cmd = {c.agent_id: c for c in m.step()}["2"]
+    assert cmd.task == C.FOLLOW_PATH  # leaves via the elevator at its own altitude first
+    assert cmd.goal["path"][-1][2] == m.strategy.altitude("2")
+    assert "2" not in m.strategy.floor_owner.values()
+    cmd = {c.agent_id: c for c in m.step()}["2"]
+    assert cmd.task == C.GO_HOME_AND_REFILL
+
+
+def test_silent_agent_floor_is_reassigned_and_agent_gets_work_on_return():
+    m = FakeMission()
+    m.strategy.p.floor_priority = (2, 0, 1)
+    m.step(); m.step(); m.step()  # take off, transit, search
+    owner2 = [f for f, o in m.strategy.floor_owner.items() if o == "2"]
+    assert owner2 == [2]
+    m.silent.add("2")
+    for _ in range(3):
+        m.step()
+    assert m.strategy.floor_owner.get(2) != "2"
+    assert "2" not in {c.agent_id for c, _ in m.log[-6:]}
+    m.silent.clear()
+    got = []
+    for _ in range(3):
+        got += [c for c in m.step() if c.agent_id == "2"]
+    assert got, "a returning agent gets work again"
+
+
+def test_silent_agent_work_goes_to_the_other_uav():
+    m = FakeMission()
+    m.fail_tasks.add(("3", C.EXTINGUISH_FACADE_FIRE))  # uav 3 never manages to put its fire out
+    m.silent.add("2")
+    m.agents["2"].last_seen = -100
+    steps = m.run(400)
+    searched = {c.target for c, ok in m.log if c.task == C.SEARCH_FACADE and c.agent_id == "3"}
+    assert searched >= {0, 1, 2}
+    assert steps == -1  # uav 3 cannot extinguish and uav 2 is silent: honest failure
+    assert all(c.agent_id != "2" for c, _ in m.log)
+
+
+def test_failed_task_is_given_up_and_taken_by_another_agent():
+    m = FakeMission()
+    m.fail_tasks.add(("2", C.SEARCH_FACADE))
+    steps = m.run(400)
+    assert steps > 0
+    searched_ok = {c.target for c, ok in m.log if c.task == C.SEARCH_FACADE and ok}
+    assert 2 in searched_ok  # floor 2, uav 2's first floor, was searched by uav 3
+
+
+def test_second_search_then_indoor():
+    m = FakeMission()
+    # No facade fire on floor 0 is ever found: floor 0 gets a second search before any indoor floor.
+    fid = [k for k, v in TRUE_FIRES.items() if v[0] == C.KIND_FACADE and G.floor_of(v[1][2]) == 0][0]
+    saved = TRUE_FIRES.pop(fid)
+    try:
+        m.run(200)
+    finally:
+        TRUE_FIRES[fid] = saved
+    facade0 = [i for i, (c, ok) in enumerate(m.log) if c.task == C.SEARCH_FACADE and c.target == 0]
+    indoor = [i for i, (c, ok) in enumerate(m.log) if c.task == C.ENTER_BUILDING]
+    assert len(facade0) == 2
+    assert indoor and min(indoor) > facade0[1] or all(
+        m.strategy.facade_searches[f] >= 1 for f in (1, 2))
+
+
+def test_restart_rebuilds_floor_ownership_from_data_feeds():
+    m = FakeMission()
+    for _ in range(3):
+        m.step()
+    # A fresh strategy (restarted node): uav 2 is busy searching floor 2's facade, uav 3 idle near home.
+    a2 = m.agents["2"]
+    a2.is_idle, a2.active_task = False, C.SEARCH_FACADE
+    a2.x, a2.y, a2.z = 26.7, 12.7, 10.5
+    s = Strategy()
+    cmds = {c.agent_id: c for c in s.decide(m.world())}
+    assert s.floor_owner.get(2) == "2"
+    assert "2" not in cmds
+    if "3" in cmds and cmds["3"].target is not None:
+        floor = cmds["3"].target[1] if isinstance(cmds["3"].target, tuple) else cmds["3"].target
+        assert floor != 2
+
+
+def test_known_fire_is_approached_then_extinguished():
+    s = Strategy()
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *G.viewpoint((24.2, 8.2, 8.25))[:3],
+                  ual_state=C.UAL_FLYING_AUTO, water_level=1.0, last_seen=0.0)
+    w = WorldView(0.0, {"2": a}, {7: FireView(7, 24.2, 8.2, 8.25, C.KIND_FACADE)})
+    c1 = s.decide(w)[0]
+    assert (c1.task, c1.goal["fire_id"]) == (C.GO_TO_FACADE_FIRE, 7)
+    s.on_sent(c1); s.on_result(c1, True)
+    c2 = s.decide(w)[0]
+    assert (c2.task, c2.goal["fire_id"]) == (C.EXTINGUISH_FACADE_FIRE, 7)
+
+
+def test_extinguished_and_lost_fires_are_not_targets():
+    s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 0, 0, 5, ual_state=C.UAL_FLYING_AUTO, water_level=1.0,
+                  last_seen=0.0)
+    fires = {1: FireView(1, 24.2, 8.2, 8.25, C.KIND_FACADE, C.STATUS_EXTINGUISHED),
+             2: FireView(2, 11.4, 8.5, 12.5, C.KIND_FACADE, C.STATUS_LOST)}
+    cmds = s.decide(WorldView(0.0, {"2": a}, fires))
+    assert all(c.task in (C.FOLLOW_PATH, C.GO_HOME_AND_REFILL) and c.target in (None, ("transit", None))
+               for c in cmds)
+
+
+def test_classify_fire_by_position():
+    assert classify_fire(C.SUBTYPE_UNKNOWN, 1.0, 14.0, 0.0) == C.KIND_GROUND
+    assert classify_fire(C.SUBTYPE_UNKNOWN, 11.4, 8.5, 6.0) == C.KIND_FACADE
+    assert classify_fire(C.SUBTYPE_UNKNOWN, 11.1, 8.5, 6.0) == C.KIND_FACADE
+    assert classify_fire(C.SUBTYPE_UNKNOWN, 17.0, 12.0, 6.0) == C.KIND_INDOOR
+    assert classify_fire(C.SUBTYPE_GROUND, 17.0, 12.0, 6.0) == C.KIND_GROUND
+
+
+def test_uavs_take_the_ground_floor_indoors_when_the_ugv_is_gone():
+    m = FakeMission(Strategy(StrategyParams(uavs_take_ground_floor_indoors=True)))
+    m.silent.add("0")
+    m.agents["0"].last_seen = -100.0
+    steps = m.run(400)
+    assert steps > 0
+    assert all(c.agent_id != "0" for c, _ in m.log)
+    entered = {c.target for c, _ in m.log if c.task == C.ENTER_BUILDING}
+    assert any(t[0] == 0 for t in entered)
+
+
+def test_low_tank_refills_before_a_new_fire_job():
+    s = Strategy()
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, -3.0, 20.0, 5.5, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=0.5, last_seen=0.0)
+    w = WorldView(0.0, {"2": a}, {7: FireView(7, 24.2, 8.2, 8.25, C.KIND_FACADE)})
+    cmd = s.decide(w)[0]
+    assert cmd.task == C.GO_HOME_AND_REFILL
+    s2 = Strategy()
+    a.water_level = 1.5
+    assert s2.decide(w)[0].task == C.FOLLOW_PATH
+
+
+def test_layout_from_the_simulator_world_file_matches_the_defaults():
+    import os
+    import yaml
+    from mbzirc_central_unit.layout import Layout, load_world
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "..", "ual_sim", "src", "ual_sim", "worlds",
+                        "c3_default.yaml")
+    with open(path, encoding="utf-8") as f:
+        loaded = load_world(yaml.safe_load(f))
+    default = Layout()
+    assert sorted(loaded.windows) == sorted(default.windows)
+    assert sorted(loaded.facade_holders) == sorted(default.facade_holders)
+    assert {f: [r.entry for r in rs] for f, rs in loaded.rooms.items()} == \
+        {f: [r.entry for r in rs] for f, rs in default.rooms.items()}
+    assert set(loaded.rooms) == {0, 1, 2} and len(loaded.rooms[1]) == 2 and len(loaded.rooms[2]) == 2

@@ -1,0 +1,1 @@
+"""Robustness harness of the MBZIRC C3 system: fuzzer, network-namespace hosts, fault scenarios, report."""

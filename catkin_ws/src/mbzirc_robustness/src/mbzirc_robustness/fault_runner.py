@@ -1,0 +1,321 @@
+"""Runs a mission distributed over network-namespace hosts and injects the scheduled faults.
+
+Why: the only convincing proof that the system survives Wi-Fi drops and crashes is to run the real
+launch files, one host per robot plus the ground station, cut links and kill -9 nodes mid-mission, and
+look at what the central unit and the referee (mission recorder) report.
+
+How: the lab (``netns.NetnsLab``) is built first; then this process moves its own network stack into the
+ground-station namespace (``setns``) so that its monitor node reaches every host, like a tool running on
+the ground station. Links are cut with ``ip`` (named namespaces are reachable from anywhere) and nodes are
+killed by pid (namespaces share the PID space).
+"""
+from __future__ import annotations
+
+import ctypes
+import glob
+import json
+import os
+import shutil
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from mbzirc_robustness import constants as C
+from mbzirc_robustness import faults as F
+from mbzirc_robustness.netns import NetnsLab, install_signal_cleanup, wait_tcp
+
+CLONE_NEWNET = 0x40000000
+
+
+def enter_namespace(ns: str) -> None:
+    """Move the calling thread (and every thread it creates later) into named network namespace ``ns``."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    fd = os.open(f"/run/netns/{ns}", os.O_RDONLY)
+    try:
+        if libc.setns(fd, CLONE_NEWNET) != 0:
+            err = ctypes.get_errno()
+            raise OSError(err, f"setns({ns}) failed: {os.strerror(err)}")
+    finally:
+        os.close(fd)
+
+
+@dataclass
+class SuiteConfig:
+    """What to run. Times in sim seconds unless named ``*_wall_s``."""
+
+    uavs: int = 3
+    ugv: bool = True
+    seed: int = 1
+    rtf: float = 4.0
+    duration: float = 600.0
+    link_cut_s: float = C.LINK_CUT_S
+    start_s: float = 40.0
+    spacing_s: float = 25.0
+    recover_wall_s: float = 45.0
+    startup_wall_s: float = 180.0
+    out_dir: str = "results/robustness/faults"
+    fuzz_dir: str = "results/robustness"  # every fuzz_report*.json there is merged into the report
+    report_path: str = "results/robustness/report.json"
+    schedule: list[F.Fault] = field(default_factory=list)
+
+
+class Monitor:
+    """The fault suite's eyes on the ground station: central-unit status, heartbeats, data feeds, tracks."""
+
+    def __init__(self) -> None:
+        import rospy
+        from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
+        from std_msgs.msg import Header, String
+        self.rospy = rospy
+        self.lock = threading.Lock()
+        self.history: list[tuple[float, dict[str, Any]]] = []
+        self.last_heartbeat_wall = 0.0
+        self.last_feed_wall: dict[str, float] = {}
+        self.last_tracks: Optional[int] = None
+        self.last_tracks_wall = 0.0
+        self.subs = [rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=10),
+                     rospy.Subscriber("/central_unit/heartbeat", Header, self._on_heartbeat, queue_size=1),
+                     rospy.Subscriber("/estimated_objects", ObjectList, self._on_objects, queue_size=1)]
+        for i in range(0, 10):
+            self.subs.append(rospy.Subscriber(f"/mbzirc2020_{i}/data_feed", AgentDataFeed, self._on_feed,
+                                              callback_args=str(i), queue_size=1))
+
+    def _on_status(self, msg) -> None:
+        try:
+            st = json.loads(msg.data)
+        except ValueError:
+            return
+        with self.lock:
+            self.history.append((float(st.get("t", self.rospy.get_time())), st))
+
+    def _on_heartbeat(self, _msg) -> None:
+        self.last_heartbeat_wall = time.monotonic()
+
+    def _on_feed(self, _msg, robot: str) -> None:
+        self.last_feed_wall[robot] = time.monotonic()
+
+    def _on_objects(self, msg) -> None:
+        self.last_tracks = len(msg.objects)
+        self.last_tracks_wall = time.monotonic()
+
+    def sim_time(self) -> float:
+        return self.rospy.get_time()
+
+
+class FaultSuite:
+    """Builds the lab, starts the mission on it, runs ``cfg.schedule`` and writes the robustness report."""
+
+    def __init__(self, cfg: SuiteConfig) -> None:
+        self.cfg = cfg
+        self.cfg.schedule = cfg.schedule or F.default_schedule(cfg.uavs, cfg.link_cut_s, cfg.start_s, cfg.spacing_s)
+        self.log: list[str] = []
+        self.lab: Optional[NetnsLab] = None
+
+    def say(self, text: str) -> None:
+        """One line of progress (printed and kept for the report)."""
+        line = f"[faults] {text}"
+        print(line, flush=True)
+        self.log.append(line)
+
+    # ---- lab and mission ------------------------------------------------------------------------
+    def _robot_hosts(self) -> list[tuple[str, str, list[str]]]:
+        """(host, robot id, roslaunch args) of every robot."""
+        out = []
+        if self.cfg.ugv:
+            out.append(("ugv", "0", ["mbzirc_launchers", "ugv.launch", "id:=0"]))
+        for i in range(1, self.cfg.uavs + 1):
+            payload = "blanket" if i == 1 else "water"
+            out.append((f"uav{i}", str(i), ["mbzirc_launchers", "uav.launch", f"id:={i}", f"payload:={payload}"]))
+        return out
+
+    def _env(self, host: str) -> dict[str, str]:
+        env = self.lab.env_for(host)
+        env["ROS_LOG_DIR"] = os.path.join(self.out, "logs", host)
+        return env
+
+    def _start(self) -> None:
+        lab = self.lab
+        gs = lab.add_host(C.GROUND_STATION)
+        for host, _rid, _args in self._robot_hosts():
+            lab.add_host(host)
+        self.say("hosts: " + ", ".join(f"{h.name}={h.ip}" for h in lab.hosts.values()))
+        summary = os.path.join(self.out, "summary.json")
+        lab.popen(C.GROUND_STATION, ["roslaunch", "-p", str(C.MASTER_PORT), "mbzirc_robustness",
+                                     "ground_station_faults.launch", f"uavs:={self.cfg.uavs}",
+                                     f"ugv:={str(self.cfg.ugv).lower()}", f"seed:={self.cfg.seed}",
+                                     f"rtf:={self.cfg.rtf}", f"duration:={self.cfg.duration}",
+                                     f"output_dir:={self.out}", f"summary_path:={summary}"],
+                  env=self._env(C.GROUND_STATION), log_path=os.path.join(self.out, "gs.log"))
+        self.gs_proc = lab.hosts[C.GROUND_STATION].procs[-1]
+        first_robot = self._robot_hosts()[0][0]
+        if not wait_tcp(lab, first_robot, gs.ip, C.MASTER_PORT, timeout=60):
+            raise RuntimeError("the master on the ground station never came up (see gs.log)")
+        for host, _rid, args in self._robot_hosts():
+            lab.popen(host, ["roslaunch", "--wait", *args], env=self._env(host),
+                      log_path=os.path.join(self.out, f"{host}.log"))
+        # this process becomes a tool on the ground station
+        enter_namespace(gs.ns)
+        os.environ.update(self._env(C.GROUND_STATION))
+        os.environ.pop("ROS_HOSTNAME", None)
+
+    def _wait_mission(self, mon: Monitor) -> float:
+        """Sim time at which every robot is reported alive by the central unit (mission under way)."""
+        deadline = time.monotonic() + self.cfg.startup_wall_s
+        ids = [rid for _h, rid, _a in self._robot_hosts()]
+        while time.monotonic() < deadline and self.gs_proc.poll() is None:
+            with mon.lock:
+                last = mon.history[-1][1] if mon.history else None
+            if last and all((last.get("agents") or {}).get(r, {}).get("alive") for r in ids):
+                return mon.sim_time()
+            time.sleep(1.0)
+        raise RuntimeError("the mission never started: not every robot was alive in /central_unit/status "
+                           f"within {self.cfg.startup_wall_s:.0f} s (see {self.out}/*.log)")
+
+    # ---- faults --------------------------------------------------------------------------------
+    def _pid(self, node: str) -> Optional[int]:
+        import rosgraph
+        from mbzirc_robustness.graph import query_pid
+        return query_pid(rosgraph.Master("/robustness_faults"), node, "/robustness_faults", timeout=2.0)
+
+    def _crash(self, f: F.Fault, mon: Monitor) -> None:
+        pid = self._pid(f.target)
+        if pid is None:
+            f.result = {"survived": False, "detail": f"{f.target} was not running before the kill"}
+            return
+        tracks_before = mon.last_tracks or 0
+        self.say(f"kill -9 {f.target} (pid {pid})" + (f", {tracks_before} tracks" if f.check == F.CHECK_TRACKS else ""))
+        t_kill = time.monotonic()
+        try:
+            os.kill(pid, 9)
+        except ProcessLookupError:
+            pass
+        deadline = t_kill + self.cfg.recover_wall_s
+        new_pid, functional = None, False
+        while time.monotonic() < deadline:
+            time.sleep(0.5)
+            if new_pid is None:
+                p = self._pid(f.target)
+                new_pid = p if p is not None and p != pid else None
+            if new_pid is not None:
+                functional = self._functional(f, mon, t_kill, tracks_before)
+                if functional:
+                    break
+        took = time.monotonic() - t_kill
+        if new_pid is None:
+            detail = f"no new process named {f.target} within {self.cfg.recover_wall_s:.0f} s (respawn?)"
+        elif not functional:
+            detail = f"respawned (pid {new_pid}) but {f.check} did not recover"
+        else:
+            detail = f"respawned (pid {new_pid}) and {f.check} recovered in {took:.1f} s"
+        f.result = {"survived": new_pid is not None and functional, "detail": detail, "old_pid": pid,
+                    "new_pid": new_pid, "recovery_wall_s": round(took, 1)}
+        if f.check == F.CHECK_TRACKS:
+            f.result.update(tracks_before=tracks_before, tracks_after=mon.last_tracks)
+        self.say(f"{f.target}: {detail}")
+
+    @staticmethod
+    def _functional(f: F.Fault, mon: Monitor, t_kill: float, tracks_before: int) -> bool:
+        if f.check == F.CHECK_HEARTBEAT:
+            return mon.last_heartbeat_wall > t_kill + 0.5
+        if f.check == F.CHECK_DATA_FEED:
+            return mon.last_feed_wall.get(f.robot or "", 0.0) > t_kill + 0.5
+        if f.check == F.CHECK_TRACKS:
+            return mon.last_tracks_wall > t_kill + 0.5 and (mon.last_tracks or 0) >= tracks_before
+        return True
+
+    def _cut(self, f: F.Fault, now: float) -> None:
+        host = "ugv" if f.target == "0" else f"uav{f.target}"
+        self.lab.set_link(host, False)
+        f.result = {"t_cut": now}
+        self.say(f"link of {host} cut" + (f" for {f.duration_s:.0f} s" if f.duration_s else " for good"))
+
+    # ---- main ----------------------------------------------------------------------------------
+    def run(self) -> dict[str, Any]:
+        """Build, run, inject, judge, clean up; returns the robustness report (also written to disk)."""
+        from mbzirc_robustness.report import format_robustness, merge_fuzz_reports, robustness_report, write_json
+        self.out = os.path.abspath(self.cfg.out_dir)
+        shutil.rmtree(self.out, ignore_errors=True)
+        os.makedirs(self.out, exist_ok=True)
+        error = None
+        mon = None
+        self.lab = NetnsLab()
+        install_signal_cleanup(self.lab)
+        with self.lab:
+            try:
+                self._start()
+                import rospy
+                rospy.init_node("robustness_faults", disable_signals=True)
+                mon = Monitor()
+                t0 = self._wait_mission(mon)
+                self.say(f"mission under way at sim t={t0:.0f} s")
+                self._timeline(mon, t0)
+            except Exception as exc:  # noqa: BLE001 - reported, then cleaned up
+                error = f"{type(exc).__name__}: {exc}"
+                self.say(f"ERROR {error}")
+            finally:
+                if self.gs_proc_running():
+                    NetnsLab.stop(self.gs_proc, grace=15.0)  # the recorder writes summary.json on shutdown
+        summary = _read_json(os.path.join(self.out, "summary.json"))
+        fuzz = merge_fuzz_reports([r for r in (_read_json(p) for p in sorted(
+            glob.glob(os.path.join(self.cfg.fuzz_dir, "fuzz_report*.json")))) if r])
+        history = mon.history if mon else []
+        for f in self.cfg.schedule:
+            if f.kind in (F.KIND_LINK_CUT, F.KIND_LINK_CUT_PERMANENT) and "t_cut" in f.result:
+                t_restore = f.result.get("t_restore")
+                f.result.update(F.evaluate_link_cut(history, f.target, f.result["t_cut"], t_restore))
+        rep = robustness_report(fuzz, [F.scenario_entry(f) for f in self.cfg.schedule], summary,
+                                robots_lost=F.robots_lost(history))
+        rep["error"] = error
+        rep["config"] = {k: v for k, v in vars(self.cfg).items() if k != "schedule"}
+        rep["log"] = self.log
+        write_json(self.cfg.report_path, rep)
+        print(format_robustness(rep), flush=True)
+        return rep
+
+    def gs_proc_running(self) -> bool:
+        return getattr(self, "gs_proc", None) is not None and self.gs_proc.poll() is None
+
+    def _timeline(self, mon: Monitor, t0: float) -> None:
+        pending = sorted(self.cfg.schedule, key=lambda f: f.at_s)
+        self.threads: list[threading.Thread] = []
+        wall_limit = time.monotonic() + 2.0 * self.cfg.duration / max(self.cfg.rtf, 0.1) + 120.0
+        restores: list[tuple[float, F.Fault]] = []
+        while self.gs_proc.poll() is None:
+            now = mon.sim_time() - t0
+            for f in [f for f in pending if f.at_s <= now]:
+                pending.remove(f)
+                f.done = True
+                if f.kind == F.KIND_CRASH:  # recovery is watched in the background: the timeline runs on
+                    th = threading.Thread(target=self._crash, args=(f, mon), daemon=True)
+                    th.start()
+                    self.threads.append(th)
+                else:
+                    self._cut(f, mon.sim_time())
+                    if f.duration_s:
+                        restores.append((f.result["t_cut"] + f.duration_s, f))
+            for t_restore, f in list(restores):
+                if mon.sim_time() >= t_restore:
+                    host = "ugv" if f.target == "0" else f"uav{f.target}"
+                    self.lab.set_link(host, True)
+                    f.result["t_restore"] = mon.sim_time()
+                    self.say(f"link of {host} restored")
+                    restores.remove((t_restore, f))
+            if time.monotonic() > wall_limit:
+                self.say("wall-time limit reached: stopping the ground station")
+                break
+            time.sleep(0.5)
+        else:
+            self.say("ground-station launch ended (mission over)")
+        for th in self.threads:
+            th.join(self.cfg.recover_wall_s + 5.0)
+        for f in pending:
+            f.result = {"survived": False, "detail": "not run: the mission ended first"}
+
+
+def _read_json(path: str) -> Optional[dict[str, Any]]:
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None

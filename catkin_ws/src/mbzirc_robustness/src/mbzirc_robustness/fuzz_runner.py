@@ -1,0 +1,248 @@
+"""Sends the fuzzer's malformed messages and requests to every input of a live graph and checks survival.
+
+Why: a node that dies on a NaN or an empty image ends a mission; this runner finds such nodes
+automatically (every subscribed topic, every action goal topic, every service), says which input killed
+which node, and collects the error lines each node logged (to check it says clearly what was wrong).
+
+Wall-clock sleeps only: it must work under ``/use_sim_time`` even when nothing publishes ``/clock``.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import genpy
+import rosgraph
+import rospy
+import rosservice
+from rosgraph_msgs.msg import Log
+
+from mbzirc_robustness import constants as C
+from mbzirc_robustness import graph as G
+from mbzirc_robustness.fuzz import FuzzCase, generate_cases, message_class
+from mbzirc_robustness.report import FuzzReport
+
+
+def raw_message_class(cls: type) -> type:
+    """A message class with ``cls``'s type and md5 whose ``serialize`` writes pre-made bytes.
+
+    .. note:: rospy keeps one publisher implementation per topic, so all cases of a topic (typed and
+       byte garbage alike) go through this one class.
+    """
+
+    class RawMessage(genpy.Message):
+        __slots__ = ["payload"]
+        _slot_types = ["uint8[]"]
+        _type = cls._type
+        _md5sum = cls._md5sum
+        _full_text = cls._full_text
+        _has_header = False
+
+        def __init__(self, payload: bytes = b"") -> None:  # noqa: D107
+            self.payload = payload
+
+        def serialize(self, buff) -> None:  # noqa: D102
+            buff.write(self.payload)
+
+        def deserialize(self, str_):  # noqa: D102 - only responses are deserialized, never this
+            self.payload = bytes(str_)
+            return self
+
+    return RawMessage
+
+
+def raw_service_class(srv_cls: type) -> type:
+    """A service class with ``srv_cls``'s type/md5, a raw request and the real response class."""
+    return type("RawService", (), {"_type": srv_cls._type, "_md5sum": srv_cls._md5sum,
+                                   "_request_class": raw_message_class(srv_cls._request_class),
+                                   "_response_class": srv_cls._response_class})
+
+
+@dataclass
+class _LogSink:
+    """Collects /rosout lines of the target nodes, tagged with the input being fuzzed when they came."""
+
+    nodes: set[str]
+    current: str = ""
+    lines: list[dict[str, Any]] = field(default_factory=list)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def __call__(self, msg: Log) -> None:
+        if msg.name not in self.nodes or msg.level < C.WARN_LEVEL:
+            return
+        with self.lock:
+            self.lines.append({"node": msg.name, "level": int(msg.level), "msg": msg.msg[:300],
+                               "during": self.current})
+
+
+class GraphFuzzer:
+    """Fuzzes every input of the chosen nodes of the running graph; ``run()`` returns a ``FuzzReport``.
+
+    Args:
+        target_nodes: node name patterns (empty: every node but the fuzzer and rosout).
+        max_cases: malformed inputs per topic or service.
+        rate_hz: messages per second on each topic.
+        seed: the generator's seed (same seed, same inputs).
+        exclude_*: name patterns never to fuzz.
+        call_timeout: a service call that takes longer is reported as hung.
+    """
+
+    def __init__(self, target_nodes: list[str] | None = None, max_cases: int = C.DEFAULT_MAX_CASES,
+                 rate_hz: float = C.DEFAULT_RATE_HZ, seed: int = 0,
+                 exclude_nodes: list[str] | None = None, exclude_topics: list[str] | None = None,
+                 exclude_services: list[str] | None = None,
+                 call_timeout: float = C.SERVICE_CALL_TIMEOUT_S) -> None:
+        self.target_nodes = list(target_nodes or [])
+        self.max_cases = max_cases
+        self.period = 1.0 / max(rate_hz, 0.1)
+        self.seed = seed
+        self.exclude_nodes = list(exclude_nodes if exclude_nodes is not None else C.DEFAULT_EXCLUDE_NODES)
+        self.exclude_topics = list(exclude_topics if exclude_topics is not None else C.DEFAULT_EXCLUDE_TOPICS)
+        self.exclude_services = list(exclude_services if exclude_services is not None
+                                     else C.DEFAULT_EXCLUDE_SERVICES)
+        self.call_timeout = call_timeout
+        self.me = rospy.get_name()
+        self.master = rosgraph.Master(self.me)
+        self.my_uri = rospy.get_node_uri() or ""
+        # publishers stay up until the end of run(): unregistering one per topic makes rospy subscribers
+        # retry the dropped connection and warn once a second
+        self._pubs: list[rospy.Publisher] = []
+
+    # -----------------------------------------------------------------------------------------------
+    def targets(self) -> list[G.Target]:
+        """The inputs to fuzz now (the graph is read at each call)."""
+        nodes, types = G.query_graph(self.master, self.me)
+        return G.select_targets(nodes, types, self.target_nodes, self.exclude_nodes, self.exclude_topics,
+                                self.exclude_services, self.me)
+
+    def run(self) -> FuzzReport:
+        """Fuzz every target once; liveness is checked after every input so a death is attributed."""
+        targets = self.targets()
+        nodes = sorted({n for t in targets for n in t.nodes})
+        report = FuzzReport()
+        for n in nodes:
+            report.add_node(n, G.query_pid(self.master, n, self.me))
+        sink = _LogSink(set(nodes))
+        sub = rospy.Subscriber("/rosout", Log, sink, queue_size=500)
+        time.sleep(0.5)  # let /rosout publishers connect to us
+        try:
+            for tg in targets:
+                if rospy.is_shutdown():
+                    break
+                alive = [n for n in tg.nodes if report.nodes[n]["alive"]]
+                if not alive:
+                    report.add_skipped(tg.name, "every node behind it already died")
+                    continue
+                sink.current = tg.name
+                rospy.loginfo("fuzzing %s %s (%s) -> %s", tg.kind, tg.name, tg.type or "?", ", ".join(alive))
+                if tg.kind == G.KIND_SERVICE:
+                    self._fuzz_service(tg, report)
+                else:
+                    self._fuzz_topic(tg, report)
+            time.sleep(C.SETTLE_S)
+            for n in nodes:
+                if report.nodes[n]["alive"]:
+                    report.set_pid_after(n, G.query_pid(self.master, n, self.me), "end of fuzzing")
+        finally:
+            sub.unregister()
+            for pub in self._pubs:
+                pub.unregister()
+            self._pubs = []
+        with sink.lock:
+            for line in sink.lines:
+                report.add_log(line)
+        return report
+
+    # -----------------------------------------------------------------------------------------------
+    def _check(self, tg: G.Target, report: FuzzReport, label: str) -> None:
+        """Record a death (no answer, or a new pid after a respawn) of any node behind ``tg``."""
+        for n in tg.nodes:
+            if report.nodes[n]["alive"]:
+                pid = G.query_pid(self.master, n, self.me, timeout=1.0)
+                if pid is None:  # a busy node on a loaded machine can miss a 1 s deadline: ask again, patiently
+                    time.sleep(0.5)
+                    pid = G.query_pid(self.master, n, self.me, timeout=C.XMLRPC_TIMEOUT_S * 2)
+                report.set_pid_after(n, pid, f"{tg.name}: {label}")
+
+    def _wait_connected(self, tg: G.Target, pub: rospy.Publisher) -> list[str]:
+        """Nodes behind ``tg`` that connected to our publisher (per their own getBusInfo)."""
+        deadline = time.monotonic() + C.CONNECT_TIMEOUT_S
+        connected: set[str] = set()
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            for n in tg.nodes:
+                peers = G.inbound_peers(G.query_bus_info(self.master, n, self.me), tg.name)
+                if n not in connected and (self.me in peers or self.my_uri in peers):
+                    connected.add(n)
+            if len(connected) == len(tg.nodes) and pub.get_num_connections() >= len(tg.nodes):
+                break
+            time.sleep(0.1)
+        return sorted(connected)
+
+    def _fuzz_topic(self, tg: G.Target, report: FuzzReport) -> None:
+        try:
+            cls = message_class(tg.type)
+        except Exception as exc:  # noqa: BLE001 - a type we cannot load is reported, not fatal
+            report.add_skipped(tg.name, f"cannot load message type {tg.type}: {exc}")
+            return
+        cases = generate_cases(cls, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        pub = rospy.Publisher(tg.name, raw_message_class(cls), queue_size=len(cases) + 1)
+        self._pubs.append(pub)
+        connected = self._wait_connected(tg, pub)
+        sent = 0
+        for case in cases:
+            if rospy.is_shutdown():
+                break
+            pub.publish(pub.data_class(case.payload))
+            sent += 1
+            time.sleep(self.period)
+            self._check(tg, report, case.label)
+        time.sleep(C.SETTLE_S)
+        self._check(tg, report, "after the last case")
+        report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected,
+                         labels=[c.label for c in cases])
+
+    def _fuzz_service(self, tg: G.Target, report: FuzzReport) -> None:
+        try:
+            tg.type = rosservice.get_service_type(tg.name) or ""
+            srv_cls = genpy.message.get_service_class(tg.type)
+            if srv_cls is None:
+                raise ValueError("unknown service type")
+        except Exception as exc:  # noqa: BLE001
+            report.add_skipped(tg.name, f"cannot load service type {tg.type!r}: {exc}")
+            return
+        cases = generate_cases(srv_cls._request_class, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        proxy = rospy.ServiceProxy(tg.name, raw_service_class(srv_cls))
+        outcomes: list[tuple[str, str]] = []
+        for case in cases:
+            if rospy.is_shutdown():
+                break
+            outcome = self._call(proxy, case)
+            outcomes.append((case.label, outcome))
+            self._check(tg, report, case.label)
+            if sum(1 for _, o in outcomes if o == "timeout") >= C.MAX_SERVICE_TIMEOUTS:
+                break  # the server looks hung: do not pile up blocked calls
+        report.add_input(G.KIND_SERVICE, tg.name, tg.type, tg.nodes, len(outcomes), outcomes=outcomes,
+                         labels=[c.label for c in cases])
+
+    def _call(self, proxy: rospy.ServiceProxy, case: FuzzCase) -> str:
+        """'ok: <response>' / 'error: <why>' / 'timeout' for one request (called in a daemon thread)."""
+        result: list[str] = []
+
+        def call() -> None:
+            try:
+                resp = proxy.call(proxy.request_class(case.payload))
+                result.append("ok: " + str(resp).replace("\n", " ")[:200])
+            except Exception as exc:  # noqa: BLE001 - every failure is an outcome to report
+                result.append(f"error: {type(exc).__name__}: {str(exc)[:200]}")
+
+        th = threading.Thread(target=call, daemon=True)
+        th.start()
+        th.join(self.call_timeout)
+        return result[0] if result else "timeout"
+
+
+def _stable_hash(name: str) -> int:
+    """A per-input seed offset that does not change between runs (``hash()`` of str does)."""
+    return sum((i + 1) * ord(ch) for i, ch in enumerate(name)) % 100_003

@@ -1,0 +1,112 @@
+"""Tests of the fault verdicts and the reports (pure)."""
+import json
+
+from mbzirc_robustness import faults as F
+from mbzirc_robustness.report import FuzzReport, format_robustness, robustness_report, write_json
+
+
+def status(t, alive, owners, tasks=None, indoor=None):
+    agents = {r: {"alive": a, "task": (tasks or {}).get(r, "")} for r, a in alive.items()}
+    return (t, {"t": t, "agents": agents, "floor_owner": owners, "indoor_owner": indoor or {}})
+
+
+def test_default_schedule_has_every_fault_kind_once():
+    sched = F.default_schedule(uavs=3)
+    kinds = [f.kind for f in sched]
+    assert kinds.count(F.KIND_CRASH) == 4
+    assert kinds.count(F.KIND_LINK_CUT) == 1 and kinds.count(F.KIND_LINK_CUT_PERMANENT) == 1
+    cut = next(f for f in sched if f.kind == F.KIND_LINK_CUT)
+    assert cut.target == "2" and cut.duration_s == 60.0
+    assert next(f for f in sched if f.kind == F.KIND_LINK_CUT_PERMANENT).target == "3"
+    assert {f.target for f in sched if f.kind == F.KIND_CRASH} == {
+        "/mbzirc2020_2/fire_detector", "/mbzirc2020_1/agent", "/object_estimator", "/central_unit"}
+    assert [f.at_s for f in sched] == sorted(f.at_s for f in sched)
+    assert not any(f.kind == F.KIND_LINK_CUT_PERMANENT for f in F.default_schedule(uavs=2))
+
+
+def test_temporary_cut_survived_with_reassignment_and_return():
+    h = [status(10, {"2": True, "3": True}, {"2": "2", "3": "3"}),
+         status(20, {"2": True, "3": True}, {"2": "2", "3": "3"}),
+         status(26, {"2": False, "3": True}, {"3": "3"}),
+         status(30, {"2": False, "3": True}, {"2": "3"}),
+         status(85, {"2": True, "3": True}, {"2": "3"}, tasks={"2": "search_facade"})]
+    r = F.evaluate_link_cut(h, "2", t_cut=21, t_restore=81)
+    assert r["survived"], r
+    assert r["t_noticed"] == 26 and r["floors_owned_at_cut"] == ["f2"] and r["floors_reassigned"] == ["f2"]
+    assert r["t_back"] == 85 and r["got_work_again"]
+
+
+def test_cut_fails_when_never_noticed_or_floor_stuck_or_never_back():
+    h = [status(10, {"2": True}, {"2": "2"}), status(30, {"2": True}, {"2": "2"}),
+         status(40, {"2": True}, {"2": "2"})]
+    r = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=35)
+    assert not r["survived"] and "never marked" in r["detail"]
+    h2 = [status(10, {"2": True}, {"2": "2"}), status(25, {"2": False}, {"2": "2"}),
+          status(90, {"2": False}, {"2": "2"})]
+    r2 = F.evaluate_link_cut(h2, "2", t_cut=20, t_restore=80)
+    assert not r2["survived"]
+    assert "still owned" in r2["detail"] and "never came back" in r2["detail"]
+
+
+def test_permanent_cut_and_status_gap():
+    h = [status(10, {"3": True}, {"3": "3"}), status(25, {"3": False}, {"3": "1"}),
+         status(80, {"3": False}, {"3": "1"})]
+    r = F.evaluate_link_cut(h, "3", t_cut=20, t_restore=None)
+    assert not r["survived"] and "stopped" in r["detail"], "a 55 s gap in status is a stalled central unit"
+    h.insert(2, status(40, {"3": False}, {"3": "1"}))
+    h.insert(3, status(55, {"3": False}, {"3": "1"}))
+    h.insert(4, status(68, {"3": False}, {"3": "1"}))
+    r = F.evaluate_link_cut(h, "3", t_cut=20, t_restore=None)
+    assert r["survived"], r
+    assert F.robots_lost(h) == ["3"]
+
+
+def test_fuzz_report_marks_deaths_restarts_and_silence():
+    rep = FuzzReport()
+    rep.add_node("/a", 10)
+    rep.add_node("/b", 11)
+    rep.add_node("/c", 12)
+    rep.set_pid_after("/a", 10, "x")
+    rep.set_pid_after("/b", None, "/t: all floats NaN")
+    rep.set_pid_after("/c", 99, "/t2: empty image")
+    rep.add_log({"node": "/a", "level": 8, "msg": "bad input", "during": "/t"})
+    rep.add_log({"node": "/c", "level": 8, "msg": "Characters replaced when decoding message x", "during": "/t"})
+    rep.add_input("topic", "/t", "std_msgs/String", ["/a", "/b"], 5, connected=["/a", "/b"])
+    d = rep.to_dict()
+    s = d["summary"]
+    assert [x["node"] for x in s["nodes_died"]] == ["/b", "/c"]
+    assert s["nodes_died"][1]["restarted"] and s["nodes_died"][0]["died_on"] == "/t: all floats NaN"
+    assert s["silent_nodes"] == ["/b", "/c"], "a rospy decoding error does not count as the node's own"
+    assert s["malformed_inputs_tried"] == 5 and not s["all_survived"]
+    assert "/b <- /t" in s["silent_inputs"] and "/a <- /t" not in s["silent_inputs"]
+
+
+def test_robustness_report_counts(tmp_path):
+    rep = FuzzReport()
+    rep.add_node("/a", 1)
+    rep.add_input("topic", "/t", "x/Y", ["/a"], 7)
+    scen = [{"kind": "link_cut", "target": "2", "survived": True, "detail": "ok"},
+            {"kind": "link_cut_permanent", "target": "3", "survived": False, "detail": "never noticed"},
+            {"kind": "crash", "target": "/central_unit", "survived": True, "detail": "ok"}]
+    r = robustness_report(rep.to_dict(), scen, {"fires_extinguished": 5, "fires_total": 8}, robots_lost=["3"])
+    assert (r["link_losses"], r["link_losses_survived"], r["crashes"], r["crashes_survived"]) == (2, 1, 1, 1)
+    assert r["malformed_inputs_tried"] == 7 and r["fires_put_out"] == 5 and r["robots_lost"] == ["3"]
+    assert r["failures"] == ["link_cut_permanent 3: never noticed"]
+    text = format_robustness(r)
+    assert "link losses survived: 1/2" in text and "FAILED" in text
+    write_json(str(tmp_path / "r" / "report.json"), r)
+    assert json.loads((tmp_path / "r" / "report.json").read_text())["crashes"] == 1
+
+
+def test_merge_fuzz_reports():
+    from mbzirc_robustness.report import merge_fuzz_reports
+    a, b = FuzzReport(), FuzzReport()
+    a.add_node("/a", 1)
+    a.add_input("topic", "/t", "x/Y", ["/a"], 3)
+    b.add_node("/b", 2)
+    b.set_pid_after("/b", None, "/u: raw")
+    b.add_input("service", "/u", "x/S", ["/b"], 4, outcomes=[("raw", "timeout")] * 4)
+    m = merge_fuzz_reports([a.to_dict(), b.to_dict()])
+    assert m["summary"]["malformed_inputs_tried"] == 7 and m["summary"]["nodes"] == 2
+    assert [d["node"] for d in m["summary"]["nodes_died"]] == ["/b"] and not m["summary"]["all_survived"]
+    assert merge_fuzz_reports([]) is None

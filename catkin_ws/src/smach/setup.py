@@ -1,0 +1,5 @@
+"""Installs the pure-Python smach library (catkin_python_setup)."""
+from setuptools import setup
+from catkin_pkg.python_setup import generate_distutils_setup
+
+setup(**generate_distutils_setup(packages=["smach"], package_dir={"": "src"}))

@@ -1,0 +1,43 @@
+"""Action and service servers used by the smach_ros integration tests (importable or runnable).
+
+TestAction goal codes: g >= 0 succeed after g ms with result g + 1 (cancellable); -1 abort at once;
+-2 ignore cancels and succeed after 2 s; -3 run until cancelled (then preempted).
+"""
+import sys
+import threading
+import time
+
+import actionlib
+import rospy
+from actionlib.msg import TestAction, TestFeedback, TestResult
+
+
+class FakeActionServer:
+    def __init__(self, name):
+        self.goals = []
+        self.server = actionlib.SimpleActionServer(name, TestAction, execute_cb=self.execute, auto_start=False)
+        self.server.start()
+
+    def execute(self, goal):
+        g = goal.goal
+        self.goals.append(g)
+        if g == -1:
+            self.server.set_aborted(TestResult(result=-1))
+            return
+        start = time.monotonic()
+        while not rospy.is_shutdown():
+            if (g >= 0 and time.monotonic() - start >= g / 1000.0) or (g == -2 and time.monotonic() - start >= 2.0):
+                self.server.set_succeeded(TestResult(result=g + 1))
+                return
+            if self.server.is_preempt_requested() and g != -2:
+                self.server.set_preempted(TestResult(result=-3))
+                return
+            self.server.publish_feedback(TestFeedback(feedback=int((time.monotonic() - start) * 1000)))
+            time.sleep(0.01)
+
+
+if __name__ == "__main__":
+    # standalone server (the test kills it to check that SimpleActionState notices a dead server)
+    rospy.init_node("doomed_server", anonymous=True)
+    FakeActionServer(rospy.myargv(sys.argv)[1])
+    rospy.spin()

@@ -1,0 +1,484 @@
+"""ROS adapter of the simulator: one node serves /clock, every robot's UAL interface, sensors, TF and /sim/*.
+
+One loop in the main thread steps the physics at `~sim_rate` in sim time, paced to `~rtf` x wall time, and
+publishes what is due and subscribed (sensors cost nothing when nobody listens). Service calls arrive on
+rospy's threads and take `sim.lock`; blocking UAL calls wait (in wall time) until the robot gets there.
+Topic names are relative, so the node can be pushed into a namespace.
+"""
+from __future__ import annotations
+
+import math
+import time
+from typing import Callable, Optional
+
+import numpy as np
+import rospy
+from rospy.numpy_msg import numpy_msg
+from geometry_msgs.msg import Point, Pose, PoseArray, PoseStamped, Quaternion, TransformStamped, TwistStamped, Vector3
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, LaserScan
+from std_msgs.msg import Bool, Float32, Float64, Float64MultiArray, Header, MultiArrayDimension
+from std_srvs.srv import Empty, EmptyResponse, Trigger, TriggerResponse
+from tf2_msgs.msg import TFMessage
+from uav_abstraction_layer.msg import State
+from uav_abstraction_layer.srv import (GoToWaypoint, GoToWaypointResponse, Land, LandResponse, SetHome,
+                                       SetHomeResponse, TakeOff, TakeOffResponse)
+from visualization_msgs.msg import MarkerArray
+
+from ual_sim.msg import FireState, FireStateArray, Score
+from ual_sim.srv import InjectFault, InjectFaultResponse
+
+from . import constants as C
+from .markers import build_markers
+from .robot import Robot
+from .sim import Simulation
+from .thermal import DOWNWARD, FORWARD, to_rgb
+from .world import WorldError, load_world
+
+Q = 10  # publisher queue size: rospy then writes to sockets from its own threads, not from the sim loop
+
+
+def yaw_quat(yaw: float) -> Quaternion:
+    return Quaternion(0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
+
+
+def quat_yaw(q: Quaternion) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+class Due:
+    """A periodic output in sim time (next due time advances by whole periods, so rates hold on average)."""
+
+    def __init__(self, rate: float, phase: float = 0.0):
+        self.period = 1.0 / rate if rate > 0 else math.inf
+        self.next = phase * self.period
+
+    def __call__(self, now: float) -> bool:
+        if now + 1e-9 < self.next:
+            return False
+        self.next += self.period * max(1.0, math.floor((now - self.next) / self.period) + 1.0)
+        return True
+
+
+class RobotIO:
+    """Publishers, subscribers and services of one robot (namespace mbzirc2020_<id>)."""
+
+    def __init__(self, node: "SimNode", r: Robot, k: int):
+        self.node, self.r, self.rid = node, r, r.id
+        ns = C.robot_ns(r.id)
+        self.ns = ns
+        self.frame = f"{ns}/base_link"
+        sim = node.sim
+        p = lambda name, typ, latch=False: rospy.Publisher(f"{ns}/{name}", typ, queue_size=Q, latch=latch)  # noqa: E731
+        self.pub_pose = p("ual/pose", PoseStamped)
+        self.pub_vel = p("ual/velocity", TwistStamped)
+        self.pub_odom = p("ual/odom", Odometry)
+        self.pub_state = p("ual/state", State)
+        self.pub_water = p("actuators_system/water_level", Float32)
+        self.pub_blanket = p("actuators_system/blanket_attached", Bool)
+        self.has_laser = node.params["laser"]
+        self.thermal_dir = DOWNWARD if r.spec.payload == C.PAYLOAD_BLANKET else FORWARD
+        self.has_thermal = node.params["thermal"]
+        self.has_rgbd = node.params["rgbd"] and r.spec.payload == C.PAYLOAD_WATER
+        if self.has_laser:
+            self.pub_scan = p("scan", numpy_msg(LaserScan))     # arrays serialised with tobytes()
+        if self.has_thermal:
+            self.pub_traw = p("teraranger_evo_thermal/raw_temp_array", numpy_msg(Float64MultiArray))
+            self.pub_trgb = p("teraranger_evo_thermal/rgb_image", Image)
+            self.pub_tptat = p("teraranger_evo_thermal/ptat", Float64)
+        if self.has_rgbd:
+            self.pub_color = p("camera/color/image_rect_color", Image)
+            self.pub_depth = p("camera/aligned_depth_to_color/image_raw", Image)
+            self.pub_cinfo = p("camera/color/camera_info", CameraInfo)
+            self.pub_dinfo = p("camera/aligned_depth_to_color/camera_info", CameraInfo)
+        n = max(1, len(sim.robots))
+        self.due_pose = Due(node.params["pub_rate"], k / n)
+        self.due_laser = Due(node.params["laser_rate"], k / n)
+        self.due_thermal = Due(node.params["thermal_rate"], (k + 0.5) / n)
+        self.due_rgbd = Due(node.params["rgbd_rate"], k / n)
+        self.due_actuators = Due(2.0, k / n)
+        s = lambda name, typ, cb: rospy.Service(f"{ns}/{name}", typ, cb)  # noqa: E731
+        self.services = [
+            s("ual/take_off", TakeOff, self.on_take_off), s("ual/land", Land, self.on_land),
+            s("ual/go_to_waypoint", GoToWaypoint, self.on_go_to), s("ual/set_home", SetHome, self.on_set_home),
+            s("ual/recover_from_manual", Empty, self.on_recover),
+            s("actuators_system/start_pump", Trigger, lambda _: self.trigger(sim.start_pump)),
+            s("actuators_system/stop_pump", Trigger, lambda _: self.trigger(sim.stop_pump)),
+            s("actuators_system/release_blanket", Trigger, lambda _: self.trigger(sim.release_blanket)),
+        ]
+        self.subs = [rospy.Subscriber(f"{ns}/ual/set_velocity", TwistStamped, self.on_set_velocity, queue_size=1),
+                     rospy.Subscriber(f"{ns}/ual/set_pose", PoseStamped, self.on_set_pose, queue_size=1)]
+        # reusable messages
+        self.m_pose, self.m_vel, self.m_odom, self.m_state = PoseStamped(), TwistStamped(), Odometry(), State()
+        self.m_pose.header.frame_id = self.m_vel.header.frame_id = self.m_odom.header.frame_id = C.FRAME_ARENA
+        self.m_odom.child_frame_id = self.frame
+
+    # ------------------------------------------------------------------ services
+    def _log_refusal(self, what: str, msg: str) -> None:
+        rospy.logerr(f"[ual_sim] {self.ns} {what}: {msg}")
+
+    def _comm(self, what: str) -> bool:
+        if not self.r.comm_ok(self.node.sim.time):
+            rospy.logerr_throttle(2.0, f"[ual_sim] {self.ns}: {what} ignored (communication lost)")
+            return False
+        return True
+
+    def _command(self, what: str, fn: Callable[[], tuple[bool, str]], blocking: bool) -> bool:
+        if not self._comm(what):
+            return False
+        with self.node.sim.lock:
+            ok, msg = fn()
+        if not ok:
+            self._log_refusal(what, msg)
+            return False
+        if blocking:
+            self.node.wait_for(self.r)
+        return True
+
+    def on_take_off(self, req) -> TakeOffResponse:
+        self._command("take_off", lambda: self.r.take_off(float(req.height)), req.blocking)
+        return TakeOffResponse()
+
+    def on_land(self, req) -> LandResponse:
+        self._command("land", self.r.land, req.blocking)
+        return LandResponse()
+
+    def on_go_to(self, req) -> GoToWaypointResponse:
+        wp = req.waypoint
+        frame = wp.header.frame_id.lstrip("/")
+        if frame not in ("", C.FRAME_ARENA, "map", "odom", f"{self.ns}/odom"):
+            self._log_refusal("go_to_waypoint", f"unsupported frame_id '{wp.header.frame_id}' (use '{C.FRAME_ARENA}')")
+            return GoToWaypointResponse()
+        p, q = wp.pose.position, wp.pose.orientation
+        qn = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+        yaw = quat_yaw(q) if qn > 1e-6 else self.r.yaw
+        self._command("go_to_waypoint", lambda: self.r.go_to(p.x, p.y, p.z, yaw), req.blocking)
+        return GoToWaypointResponse()
+
+    def on_set_home(self, req) -> SetHomeResponse:
+        if self._comm("set_home"):
+            with self.node.sim.lock:
+                self.r.set_home(bool(req.set_z))
+        return SetHomeResponse()
+
+    def on_recover(self, _req) -> EmptyResponse:
+        if self._comm("recover_from_manual"):
+            with self.node.sim.lock:
+                self.r.recover_from_manual()
+        return EmptyResponse()
+
+    def trigger(self, fn: Callable[[int], tuple[bool, str]]) -> TriggerResponse:
+        if not self.r.comm_ok(self.node.sim.time):
+            return TriggerResponse(False, "communication lost")
+        with self.node.sim.lock:
+            ok, msg = fn(self.rid)
+        if not ok:
+            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} actuator: {msg}")
+        return TriggerResponse(ok, msg)
+
+    def on_set_velocity(self, msg: TwistStamped) -> None:
+        if not self._comm("set_velocity"):
+            return
+        lin, ang = msg.twist.linear, msg.twist.angular
+        v = np.array([lin.x, lin.y, lin.z, ang.z], dtype=float)
+        with self.node.sim.lock:
+            if msg.header.frame_id.endswith("base_link"):
+                c, s = math.cos(self.r.yaw), math.sin(self.r.yaw)
+                v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
+            ok, err = self.r.set_velocity(v, self.node.sim.time)
+        if not ok:
+            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} set_velocity: {err}")
+
+    def on_set_pose(self, msg: PoseStamped) -> None:
+        if not self._comm("set_pose"):
+            return
+        p, q = msg.pose.position, msg.pose.orientation
+        qn = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+        with self.node.sim.lock:
+            yaw = quat_yaw(q) if qn > 1e-6 else self.r.yaw
+            ok, err = self.r.go_to(p.x, p.y, p.z, yaw)
+        if not ok:
+            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} set_pose: {err}")
+
+    # ------------------------------------------------------------------ outputs
+    def publish(self, now: float, stamp: rospy.Time) -> Optional[TransformStamped]:
+        """Publish what is due and subscribed; returns the TF of this robot when its pose is due."""
+        sim, r = self.node.sim, self.r
+        if not r.comm_ok(now):
+            return None
+        tf = None
+        if self.due_pose(now):
+            x, y, z, yaw = sim.reported_pose(r)
+            q = yaw_quat(yaw)
+            if self.pub_pose.get_num_connections():
+                m = self.m_pose
+                m.header.stamp = stamp
+                m.pose.position = Point(x, y, z)
+                m.pose.orientation = q
+                self.pub_pose.publish(m)
+            if self.pub_vel.get_num_connections():
+                m = self.m_vel
+                m.header.stamp = stamp
+                m.twist.linear = Vector3(*r.vel)
+                m.twist.angular = Vector3(0.0, 0.0, r.yaw_rate)
+                self.pub_vel.publish(m)
+            if self.pub_odom.get_num_connections():
+                m = self.m_odom
+                m.header.stamp = stamp
+                m.pose.pose.position = Point(x, y, z)
+                m.pose.pose.orientation = q
+                c, s = math.cos(yaw), math.sin(yaw)   # odom twist is in the child (body) frame
+                m.twist.twist.linear = Vector3(c * r.vel[0] + s * r.vel[1], -s * r.vel[0] + c * r.vel[1], r.vel[2])
+                m.twist.twist.angular = Vector3(0.0, 0.0, r.yaw_rate)
+                self.pub_odom.publish(m)
+            if self.pub_state.get_num_connections():
+                self.m_state.state = r.state
+                self.pub_state.publish(self.m_state)
+            tf = TransformStamped()
+            tf.header.stamp = stamp
+            tf.header.frame_id = f"{self.ns}/odom" if self.node.params["tf_odom"] else C.FRAME_ARENA
+            tf.child_frame_id = self.frame
+            tf.transform.translation = Vector3(x, y, z)
+            tf.transform.rotation = q
+        if self.due_actuators(now):
+            if self.pub_water.get_num_connections():
+                self.pub_water.publish(Float32(r.water))
+            if self.pub_blanket.get_num_connections():
+                self.pub_blanket.publish(Bool(r.blanket))
+        if not r.sensors_ok(now):
+            return tf
+        if self.has_laser and self.due_laser(now) and self.pub_scan.get_num_connections():
+            self.node.timed("laser", lambda: self.publish_scan(stamp))
+        if self.has_thermal and self.due_thermal(now) and (
+                self.pub_traw.get_num_connections() or self.pub_trgb.get_num_connections()
+                or self.pub_tptat.get_num_connections()):
+            self.node.timed("thermal", lambda: self.publish_thermal(stamp))
+        if self.has_rgbd and self.due_rgbd(now) and (
+                self.pub_color.get_num_connections() or self.pub_depth.get_num_connections()
+                or self.pub_cinfo.get_num_connections() or self.pub_dinfo.get_num_connections()):
+            self.node.timed("rgbd", lambda: self.publish_rgbd(stamp))
+        return tf
+
+    def publish_scan(self, stamp: rospy.Time) -> None:
+        ranges = self.node.sim.laser(self.r)
+        m = numpy_msg(LaserScan)()
+        m.header.stamp, m.header.frame_id = stamp, f"{self.ns}/laser_link"
+        m.angle_min = -math.pi
+        m.angle_increment = 2.0 * math.pi / C.LASER_BEAMS
+        m.angle_max = m.angle_min + m.angle_increment * (C.LASER_BEAMS - 1)
+        m.scan_time = 1.0 / self.node.params["laser_rate"]
+        m.time_increment = m.scan_time / C.LASER_BEAMS
+        m.range_min, m.range_max = C.LASER_RANGE_MIN, C.LASER_RANGE_MAX
+        m.ranges = ranges.astype(np.float32)
+        m.intensities = np.zeros(0, np.float32)
+        self.pub_scan.publish(m)
+
+    def publish_thermal(self, stamp: rospy.Time) -> None:
+        temps = self.node.sim.thermal_frame(self.r, self.thermal_dir)
+        if self.pub_traw.get_num_connections():
+            m = numpy_msg(Float64MultiArray)()
+            m.layout.dim = [MultiArrayDimension("rows", C.THERMAL_SIZE, C.THERMAL_SIZE * C.THERMAL_SIZE),
+                            MultiArrayDimension("cols", C.THERMAL_SIZE, C.THERMAL_SIZE)]
+            m.data = np.ascontiguousarray(temps.ravel(), dtype=np.float64)
+            self.pub_traw.publish(m)
+        if self.pub_trgb.get_num_connections():
+            img = to_rgb(temps)
+            self.pub_trgb.publish(Image(header=Header(stamp=stamp, frame_id=f"{self.ns}/thermal_link"),
+                                        height=C.THERMAL_SIZE, width=C.THERMAL_SIZE, encoding="rgb8",
+                                        is_bigendian=0, step=3 * C.THERMAL_SIZE, data=img.tobytes()))
+        if self.pub_tptat.get_num_connections():
+            self.pub_tptat.publish(Float64(C.THERMAL_PTAT))
+
+    def publish_rgbd(self, stamp: rospy.Time) -> None:
+        cam = self.node.sim.rgbd
+        frame = f"{self.ns}/camera_color_optical_frame"
+        hdr = Header(stamp=stamp, frame_id=frame)
+        want_c, want_d = self.pub_color.get_num_connections(), self.pub_depth.get_num_connections()
+        if want_c or want_d:
+            bgr, depth = self.node.sim.rgbd_frame(self.r)
+            if want_c:
+                self.pub_color.publish(Image(header=hdr, height=cam.h, width=cam.w, encoding="bgr8",
+                                             is_bigendian=0, step=3 * cam.w, data=bgr.tobytes()))
+            if want_d:
+                self.pub_depth.publish(Image(header=hdr, height=cam.h, width=cam.w, encoding="16UC1",
+                                             is_bigendian=0, step=2 * cam.w, data=depth.astype("<u2").tobytes()))
+        info = cam.camera_info()
+        ci = CameraInfo(header=hdr, height=cam.h, width=cam.w, distortion_model="plumb_bob",
+                        D=[0.0] * 5, K=info["K"], R=[1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0], P=info["P"])
+        if self.pub_cinfo.get_num_connections():
+            self.pub_cinfo.publish(ci)
+        if self.pub_dinfo.get_num_connections():
+            self.pub_dinfo.publish(ci)
+
+    def static_tfs(self, stamp: rospy.Time) -> list:
+        """base_link -> laser_link, thermal_link, camera_color_optical_frame (REP 103 optical)."""
+        out = []
+
+        def add(child: str, xyz, q: Quaternion) -> None:
+            t = TransformStamped()
+            t.header.stamp, t.header.frame_id, t.child_frame_id = stamp, self.frame, f"{self.ns}/{child}"
+            t.transform.translation = Vector3(xyz[0], xyz[1], xyz[2] + self.r.sensor_z)
+            t.transform.rotation = q
+            out.append(t)
+        add("laser_link", C.LASER_OFFSET, Quaternion(0, 0, 0, 1))
+        if self.thermal_dir == DOWNWARD:
+            add("thermal_link", C.THERMAL_OFFSET_DOWNWARD, Quaternion(0, math.sqrt(0.5), 0, math.sqrt(0.5)))
+        else:
+            add("thermal_link", C.THERMAL_OFFSET_FORWARD, Quaternion(0, 0, 0, 1))
+        add("camera_color_optical_frame", C.CAM_OFFSET, Quaternion(-0.5, 0.5, -0.5, 0.5))
+        return out
+
+
+class SimNode:
+    """The whole simulator node (see the package README for params and topics)."""
+
+    def __init__(self):
+        g = rospy.get_param
+        self.params = {
+            "world_file": str(g("~world_file", "")), "uavs": int(g("~uavs", 3)), "ugv": bool(g("~ugv", True)),
+            "seed": int(g("~seed", 1)), "rtf": float(g("~rtf", 1.0)), "sim_rate": float(g("~sim_rate", C.SIM_RATE)),
+            "pub_rate": float(g("~pub_rate", C.PUB_RATE)), "laser": bool(g("~laser", True)),
+            "laser_rate": float(g("~laser_rate", C.LASER_RATE)), "thermal": bool(g("~thermal", True)),
+            "thermal_rate": float(g("~thermal_rate", C.THERMAL_RATE)), "rgbd": bool(g("~rgbd", True)),
+            "rgbd_rate": float(g("~rgbd_rate", C.CAM_RATE)), "pose_noise": float(g("~pose_noise", 0.0)),
+            "wind": bool(g("~wind", True)), "tf_odom": bool(g("~tf_odom", False)),
+            "markers": bool(g("~markers", True)), "report_cpu": bool(g("~report_cpu", True)),
+        }
+        prm = self.params
+        if not (prm["sim_rate"] > 0 and math.isfinite(prm["sim_rate"])):
+            rospy.logerr(f"[ual_sim] ~sim_rate must be > 0, got {prm['sim_rate']}; using {C.SIM_RATE}")
+            prm["sim_rate"] = C.SIM_RATE
+        if prm["uavs"] < 0:
+            rospy.logerr(f"[ual_sim] ~uavs must be >= 0, got {prm['uavs']}; using 3")
+            prm["uavs"] = 3
+        try:
+            world = load_world(prm["world_file"] or None, n_uavs=prm["uavs"], ugv=prm["ugv"])
+        except WorldError as e:
+            rospy.logerr(f"[ual_sim] {e}. Falling back to the default world.")
+            world = load_world(None, n_uavs=prm["uavs"], ugv=prm["ugv"])
+        self.sim = Simulation(world, prm["seed"], prm["pose_noise"], prm["wind"])
+        self.cpu: dict[str, list[float]] = {}
+        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=Q)
+        self.pub_tf = rospy.Publisher("/tf", TFMessage, queue_size=Q)
+        self.pub_tf_static = rospy.Publisher("/tf_static", TFMessage, queue_size=Q, latch=True)
+        self.pub_fires = rospy.Publisher("/sim/fires", FireStateArray, queue_size=Q)
+        self.pub_score = rospy.Publisher("/sim/score", Score, queue_size=Q, latch=True)
+        self.pub_rtf = rospy.Publisher("/sim/rtf", Float32, queue_size=Q, latch=True)
+        self.pub_robots = rospy.Publisher("/sim/robots", PoseArray, queue_size=Q)
+        self.pub_markers = rospy.Publisher("/sim/markers", MarkerArray, queue_size=Q, latch=True)
+        rospy.set_param("/sim/robot_ids", [int(i) for i in sorted(self.sim.robots)])
+        self.io = {rid: RobotIO(self, r, k) for k, (rid, r) in enumerate(sorted(self.sim.robots.items()))}
+        self.fault_srv = rospy.Service("/sim/inject_fault", InjectFault, self.on_fault)
+        self.due_fires = Due(C.FIRES_RATE)
+        self.due_markers = Due(C.MARKER_RATE)
+        stamp = rospy.Time(0)
+        self.pub_tf_static.publish(TFMessage([t for io in self.io.values() for t in io.static_tfs(stamp)]))
+        rospy.loginfo(f"[ual_sim] world '{world.name}' seed {prm['seed']}: {len(world.bmin)} boxes, robots "
+                      f"{sorted(self.sim.robots)}, active fires "
+                      f"{[f.holder.id for f in self.sim.fires.active()]}, rtf {prm['rtf']}")
+
+    # ------------------------------------------------------------------ helpers
+    def timed(self, name: str, fn: Callable[[], None]) -> None:
+        """Run fn and account its CPU time per sensor frame (reported in the log and by the benchmark)."""
+        t0 = time.process_time()
+        fn()
+        acc = self.cpu.setdefault(name, [0.0, 0])
+        acc[0] += time.process_time() - t0
+        acc[1] += 1
+
+    def wait_for(self, r: Robot) -> None:
+        """Block a service thread until the robot's command is done, it crashed, or the node shuts down."""
+        while not rospy.is_shutdown():
+            with self.sim.lock:
+                if r.goal_reached() or r.crashed:
+                    return
+            time.sleep(0.005)
+
+    def on_fault(self, req) -> InjectFaultResponse:
+        with self.sim.lock:
+            ok, msg = self.sim.inject_fault(int(req.robot_id), req.kind, float(req.duration))
+        if not ok:
+            rospy.logerr(f"[ual_sim] inject_fault: {msg}")
+        return InjectFaultResponse(ok, msg)
+
+    # ------------------------------------------------------------------ main loop
+    def spin(self) -> None:
+        prm = self.params
+        dt = 1.0 / prm["sim_rate"]
+        rtf = prm["rtf"]
+        wall0 = time.monotonic()
+        sim_t0 = self.sim.time
+        last_report_wall, last_report_sim = wall0, sim_t0
+        self.pub_clock.publish(Clock(rospy.Time(0)))
+        while not rospy.is_shutdown():
+            with self.sim.lock:
+                self.sim.step(dt)
+                now = self.sim.time
+                stamp = rospy.Time.from_sec(now)
+                self.pub_clock.publish(Clock(stamp))
+                tfs = [tf for io in self.io.values() if (tf := io.publish(now, stamp)) is not None]
+                if tfs and self.pub_tf.get_num_connections():
+                    self.pub_tf.publish(TFMessage(tfs))
+                if self.due_fires(now):
+                    self.publish_ground_truth(stamp)
+                if prm["markers"] and self.due_markers(now) and self.pub_markers.get_num_connections():
+                    self.publish_markers(stamp)
+                for ev in self.sim.pop_events():
+                    rospy.loginfo(f"[ual_sim] t={ev.time:.1f}s {ev.text}")
+            wall = time.monotonic()
+            if wall - last_report_wall >= 1.0:
+                achieved = (now - last_report_sim) / (wall - last_report_wall)
+                self.pub_rtf.publish(Float32(achieved))
+                rospy.loginfo_throttle(10.0, f"[ual_sim] real-time factor {achieved:.2f} (target {rtf:g}); "
+                                       + self.cpu_report())
+                last_report_wall, last_report_sim = wall, now
+            if rtf > 0:
+                ahead = (now - sim_t0) / rtf - (wall - wall0)
+                if ahead > 0:
+                    time.sleep(ahead)
+                elif ahead < -1.0:   # far behind: do not try to catch up in a burst
+                    wall0 -= ahead + 1.0
+
+    def cpu_report(self) -> str:
+        return ", ".join(f"{k} {1e3 * v[0] / max(v[1], 1):.2f} ms/frame" for k, v in sorted(self.cpu.items()))
+
+    def publish_ground_truth(self, stamp: rospy.Time) -> None:
+        sim = self.sim
+        if self.pub_fires.get_num_connections():
+            arr = FireStateArray(header=Header(stamp=stamp, frame_id=C.FRAME_ARENA))
+            heat = sim.fires.heat()
+            for i, f in enumerate(sim.fires.fires):
+                h = f.holder
+                temp = C.HEATER_TEMP * heat[i] if f.kind != 1 else (C.BLANKET_TEMP if f.covered else C.HEATER_TEMP)
+                arr.fires.append(FireState(
+                    id=h.id, kind=f.kind, floor=h.floor, active=f.active, extinguished=f.extinguished,
+                    progress=f.progress, litres_received=f.litres, litres_needed=C.LITRES_PER_FIRE,
+                    temperature=temp if f.active else C.INACTIVE_HOLDER_TEMP,
+                    position=Point(*h.position), normal=Vector3(*h.normal), extinguish_time=f.extinguish_time))
+            self.pub_fires.publish(arr)
+        sc = sim.score()
+        self.pub_score.publish(Score(
+            header=Header(stamp=stamp), score=sc["score"], max_score=sc["max_score"],
+            fires_extinguished=len(sc["extinguished"]), elapsed=sc["elapsed"], time_left=sc["time_left"],
+            extinguished_ids=[e[0] for e in sc["extinguished"]], extinguish_times=[e[1] for e in sc["extinguished"]],
+            crashed_robots=[C.robot_ns(i) for i in sc["crashed"]]))
+        if self.pub_robots.get_num_connections():
+            self.pub_robots.publish(PoseArray(header=Header(stamp=stamp, frame_id=C.FRAME_ARENA), poses=[
+                Pose(Point(*r.pos), yaw_quat(r.yaw)) for _, r in sorted(sim.robots.items())]))
+
+    def publish_markers(self, stamp: rospy.Time) -> None:
+        self.pub_markers.publish(build_markers(self.sim, stamp))
+
+
+def main() -> None:
+    rospy.init_node("ual_sim")
+    node = SimNode()
+    try:
+        node.spin()
+    except rospy.ROSInterruptException:
+        pass
+    rospy.loginfo(f"[ual_sim] shutting down at t={node.sim.time:.1f}s; {node.cpu_report()}")
+
+
+__all__ = ["SimNode", "main"]

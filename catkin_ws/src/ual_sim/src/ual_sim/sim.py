@@ -1,0 +1,231 @@
+"""The simulation without ROS: world, fires, robots, effects, collisions, faults; stepped by the node.
+
+Why separate from the node: the physics, the refill rule and the scoring are tested with pytest at full
+speed, and benchmarks can time the sensor models alone.
+"""
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from . import constants as C
+from .effects import JetResult, shoot
+from .fires import FireSet
+from .rgbd import RGBDCamera
+from .robot import Robot
+from .thermal import DOWNWARD, FORWARD, ThermalCamera
+from .world import World
+
+FAULT_KINDS = ("crash", "comm_loss", "sensor_failure")
+
+
+@dataclass
+class Event:
+    """Something worth a log line and a score entry (crash, extinguish, refill, blanket drop)."""
+    time: float
+    text: str
+
+
+@dataclass
+class Blanket:
+    """A released blanket lying on the ground (for markers)."""
+    position: np.ndarray
+    fire: Optional[int]
+
+
+class Simulation:
+    """All state of a trial. Every public method must be called with `self.lock` held (the node does)."""
+
+    def __init__(self, world: World, seed: int = 0, pose_noise_std: float = 0.0, wind: bool = True):
+        self.world = world
+        self.seed = seed
+        self.rng = np.random.default_rng(seed + 1000)
+        self.fires = FireSet(world, seed)
+        self.robots: dict[int, Robot] = {s.id: Robot(s, world) for s in world.robots}
+        self.time = 0.0
+        self.lock = threading.RLock()
+        self.pose_noise_std = pose_noise_std
+        self.wind = wind
+        self.events: list[Event] = []
+        self.jets: dict[int, JetResult] = {}
+        self.blankets: list[Blanket] = []
+        self.thermal = {FORWARD: ThermalCamera(FORWARD), DOWNWARD: ThermalCamera(DOWNWARD)}
+        self.rgbd = RGBDCamera()
+        self._cache: dict = {}   # (robot id, sensor) -> (key, frame): a robot that did not move sees the same
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, dt: float) -> None:
+        """Advance everything by dt seconds of sim time."""
+        self.time += dt
+        rng = self.rng if self.wind else _NO_WIND
+        for r in self.robots.values():
+            before = r.refills
+            r.step(dt, self.time, rng)
+            if r.refills != before:
+                self.events.append(Event(self.time, f"robot {r.id}: reset at home (tank refilled / new blanket)"))
+        self.jets.clear()
+        for r in self.robots.values():
+            litres = r.pump(dt)
+            if litres > 0.0:
+                p, d = r.nozzle()
+                jet = shoot(self.world, self.fires, p, d)
+                self.jets[r.id] = jet
+                if jet.fire is not None and jet.share > 0.0:
+                    was = self.fires.fires[jet.fire].extinguished
+                    self.fires.add_water(jet.fire, litres * jet.share, self.time)
+                    f = self.fires.fires[jet.fire]
+                    if f.extinguished and not was:
+                        self.events.append(Event(self.time, f"fire {f.holder.id} extinguished by robot {r.id}"))
+            if r.pump_on and r.water <= 0.0:
+                r.pump_on = False
+                self.events.append(Event(self.time, f"robot {r.id}: tank empty, pump stopped"))
+        self._collisions()
+
+    def _collisions(self) -> None:
+        alive = [r for r in self.robots.values() if not r.crashed]
+        if not alive:
+            return
+        # building: flying UAVs and the UGV (a landed UAV rests on its support surface)
+        movers = [r for r in alive if r.flying or not r.is_uav]
+        if movers:
+            centres = np.array([r.body_centre() for r in movers])
+            radii = np.array([r.radius for r in movers])
+            hit = self.world.sphere_hits_building(centres, radii)
+            for r, h in zip(movers, hit):
+                if h:
+                    self._crash(r, "hit the building")
+        for r in alive:
+            if r.flying and r.pos[2] < -1e-3 and not r.crashed:
+                self._crash(r, "hit the ground")
+            elif not self.world.inside_arena(r.pos) and not r.crashed:
+                self._crash(r, "left the arena")
+        alive = [r for r in alive if not r.crashed]
+        if len(alive) > 1:
+            c = np.array([r.body_centre() for r in alive])
+            rad = np.array([r.radius for r in alive])
+            d = np.linalg.norm(c[:, None, :] - c[None, :, :], axis=2)
+            close = d < (rad[:, None] + rad[None, :])
+            np.fill_diagonal(close, False)
+            for i, j in zip(*np.nonzero(np.triu(close))):
+                self._crash(alive[i], f"collided with robot {alive[j].id}")
+                self._crash(alive[j], f"collided with robot {alive[i].id}")
+
+    def _crash(self, r: Robot, reason: str) -> None:
+        if r.crashed:
+            return
+        r.crash(reason)
+        self.events.append(Event(self.time, f"robot {r.id} crashed: {reason}"))
+
+    # ------------------------------------------------------------------ actuators
+    def start_pump(self, rid: int) -> tuple[bool, str]:
+        r = self.robots[rid]
+        if r.crashed:
+            return False, f"robot {rid} has crashed"
+        if r.spec.payload != C.PAYLOAD_WATER:
+            return False, f"robot {rid} carries no water pump"
+        if r.water <= 0.0:
+            return False, "tank empty"
+        r.pump_on = True
+        return True, f"pump on, {r.water:.2f} L left"
+
+    def stop_pump(self, rid: int) -> tuple[bool, str]:
+        r = self.robots[rid]
+        if r.spec.payload != C.PAYLOAD_WATER:
+            return False, f"robot {rid} carries no water pump"
+        r.pump_on = False
+        return True, f"pump off, {r.water:.2f} L left"
+
+    def release_blanket(self, rid: int) -> tuple[bool, str]:
+        r = self.robots[rid]
+        if r.crashed:
+            return False, f"robot {rid} has crashed"
+        if r.spec.payload != C.PAYLOAD_BLANKET:
+            return False, f"robot {rid} carries no blanket"
+        if not r.blanket:
+            return False, "no blanket attached (reset at home for a new one)"
+        r.blanket = False
+        height = r.pos[2] - self.world.support_height(r.pos[0], r.pos[1], r.pos[2])
+        i = self.fires.drop_blanket(r.pos[0], r.pos[1], height, self.time)
+        self.blankets.append(Blanket(np.array([r.pos[0], r.pos[1], 0.0]), i))
+        if i is not None and self.fires.fires[i].active:
+            self.events.append(Event(self.time, f"fire {self.fires.fires[i].holder.id} covered by robot {rid}"))
+            return True, "blanket released on the fire"
+        return True, "blanket released"
+
+    # ------------------------------------------------------------------ faults
+    def inject_fault(self, rid: int, kind: str, duration: float) -> tuple[bool, str]:
+        """Test hook: crash a robot, cut its communications or its sensors for `duration` s (0 = forever)."""
+        if rid not in self.robots:
+            return False, f"unknown robot id {rid} (known: {sorted(self.robots)})"
+        if kind not in FAULT_KINDS:
+            return False, f"unknown fault kind '{kind}' (known: {', '.join(FAULT_KINDS)})"
+        if not math.isfinite(duration) or duration < 0.0:
+            return False, f"duration must be >= 0, got {duration}"
+        r = self.robots[rid]
+        until = math.inf if duration == 0.0 else self.time + duration
+        if kind == "crash":
+            self._crash(r, "injected fault")
+        elif kind == "comm_loss":
+            r.comm_loss_until = until
+        else:
+            r.sensor_fail_until = until
+        self.events.append(Event(self.time, f"fault {kind} injected on robot {rid} for {duration:g} s"))
+        return True, f"{kind} injected on robot {rid}"
+
+    # ------------------------------------------------------------------ outputs
+    def reported_pose(self, r: Robot) -> np.ndarray:
+        """Pose the robot reports (x, y, z, yaw): the truth plus optional Gaussian noise."""
+        p = np.array([r.pos[0], r.pos[1], r.pos[2], r.yaw])
+        if self.pose_noise_std > 0.0 and not r.crashed:
+            p[:3] += self.rng.normal(0.0, self.pose_noise_std, 3)
+        return p
+
+    def _cached(self, r: Robot, sensor: str, fn):
+        """Reuse the last frame of this sensor while the robot's pose and the fires are unchanged."""
+        key = (r.pos[0], r.pos[1], r.pos[2], r.yaw, self.fires.version)
+        hit = self._cache.get((r.id, sensor))
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        frame = fn()
+        self._cache[(r.id, sensor)] = (key, frame)
+        return frame
+
+    def laser(self, r: Robot) -> np.ndarray:
+        lz = r.pos[2] + r.sensor_z + C.LASER_OFFSET[2]
+        return self._cached(r, "laser", lambda: self.world.laser_scan(r.pos[0], r.pos[1], lz, r.yaw))
+
+    def thermal_frame(self, r: Robot, direction: int) -> np.ndarray:
+        cam = self.thermal[direction]
+        clean = self._cached(r, f"thermal{direction}",
+                             lambda: cam.render_clean(self.world, self.fires, r.sensor_base(), r.yaw))
+        return clean + self.rng.normal(0.0, cam.noise_std, clean.shape) if cam.noise_std > 0 else clean
+
+    def rgbd_frame(self, r: Robot) -> tuple[np.ndarray, np.ndarray]:
+        return self._cached(r, "rgbd", lambda: self.rgbd.render(self.world, self.fires, r.sensor_base(), r.yaw))
+
+    def score(self) -> dict:
+        done = [f for f in self.fires.fires if f.extinguished]
+        return {"score": self.fires.score(), "max_score": self.fires.max_score(),
+                "extinguished": [(f.holder.id, f.extinguish_time) for f in done],
+                "elapsed": self.time, "time_left": self.world.trial_duration - self.time,
+                "crashed": [r.id for r in self.robots.values() if r.crashed]}
+
+    def pop_events(self) -> list[Event]:
+        ev, self.events = self.events, []
+        return ev
+
+
+class _NoWind:
+    """A stand-in generator giving zero gusts (wind disabled)."""
+
+    @staticmethod
+    def standard_normal(n: int) -> np.ndarray:
+        return np.zeros(n)
+
+
+_NO_WIND = _NoWind()
+__all__ = ["Simulation", "FAULT_KINDS", "Event", "Blanket"]

@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Runs one simulated Challenge 3 trial (c3_sim.launch) headless and shows its progress in the terminal:
+#   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
+# Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
+# mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
+# port so it never clashes with another roscore on this machine.
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0
+for kv in "$@"; do
+  case "$kv" in
+    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*) declare "$kv" ;;
+    *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
+  esac
+done
+[[ "$SEED" =~ ^[0-9]+$ && "$UAVS" =~ ^[0-3]$ && "$RTF" =~ ^[0-9]+([.][0-9]+)?$ ]] \
+  || { echo "run_mission.sh: SEED must be an integer, UAVS 0..3, RTF a number" >&2; exit 2; }
+record=false; [ "$RECORD" = 1 ] || [ "$RECORD" = true ] && record=true
+# shellcheck disable=SC1091
+set +u; source "$ROOT/env.sh"; set -u
+[ -n "$OUT" ] || OUT="$ROOT/results/mission_$(date +%Y%m%d_%H%M%S)_seed${SEED}"
+OUT="$(realpath -m "$OUT")"
+[ -n "$SUMMARY" ] && SUMMARY="$(realpath -m "$SUMMARY")"
+mkdir -p "$OUT"
+PORT="$(python -c 'import socket; s=socket.socket(); s.bind(("localhost", 0)); print(s.getsockname()[1])')"
+export ROS_MASTER_URI="http://localhost:$PORT" ROS_HOSTNAME=localhost
+export ROS_LOG_DIR="$OUT/ros_logs"
+LOG="$OUT/launch.log"
+echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, record $record -> $OUT (master port $PORT)"
+
+setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
+  rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
+  duration:="$DURATION" > "$LOG" 2>&1 &
+LAUNCH_PID=$!
+stop() {
+  if kill -0 "$LAUNCH_PID" 2>/dev/null; then
+    kill -INT "$LAUNCH_PID" 2>/dev/null
+    for _ in $(seq 1 30); do kill -0 "$LAUNCH_PID" 2>/dev/null || break; sleep 0.5; done
+    kill -TERM -- "-$LAUNCH_PID" 2>/dev/null
+  fi
+}
+trap 'echo; echo "mission: interrupted"; stop; exit 130' INT TERM
+
+# Wall-time guard: twice the expected time plus start-up.
+LIMIT=$(python -c "print(int(2 * $DURATION / max(0.1, $RTF) + 180))")
+start=$(date +%s)
+shown=0
+while kill -0 "$LAUNCH_PID" 2>/dev/null; do
+  sleep 1
+  if [ "$QUIET" != 1 ]; then
+    n=$(grep -c '^\[mission\]' "$LOG" 2>/dev/null || true)
+    if [ "${n:-0}" -gt "$shown" ]; then grep '^\[mission\]' "$LOG" | tail -n +$((shown + 1)); shown=$n; fi
+  fi
+  if [ $(( $(date +%s) - start )) -gt "$LIMIT" ]; then
+    echo "mission: wall-time limit ${LIMIT}s reached, stopping"; stop; break
+  fi
+done
+wait "$LAUNCH_PID" 2>/dev/null
+[ "$QUIET" != 1 ] && grep '^\[mission\]' "$LOG" | tail -n +$((shown + 1))
+if [ -f "$OUT/summary.json" ]; then
+  echo "mission: results in $OUT (summary.json, report.png$( [ "$record" = true ] && echo ', mission.bag'))"
+  [ -n "$SUMMARY" ] && echo "mission: summary also written to $SUMMARY"
+  exit 0
+fi
+echo "mission: no summary.json was written; last lines of $LOG:" >&2
+tail -30 "$LOG" >&2
+exit 1
