@@ -36,25 +36,8 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     return s
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=int(os.environ.get("MISSION_BENCH_SEEDS", "10")))
-    ap.add_argument("--first-seed", type=int, default=1)
-    ap.add_argument("--rtf", type=float, default=4.0)
-    ap.add_argument("--uavs", type=int, default=3)
-    ap.add_argument("--duration", type=float, default=1200.0)
-    args = ap.parse_args()
-    out_root = os.path.join(ROOT, "bench", "results", "mission_runs")
-    runs = []
-    for seed in range(args.first_seed, args.first_seed + args.seeds):
-        s = run_seed(seed, args, out_root)
-        runs.append(s)
-        if "error" in s:
-            print(f"seed {seed}: FAILED to run: {s['error'][-300:]}", flush=True)
-        else:
-            print(f"seed {seed}: {s['fires_extinguished']}/{s['fires_total']} out, score {s['score']}, "
-                  f"all out at {s.get('all_out_time_s')} s, crashes {s['crashes'] or 'none'}, "
-                  f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
+def summarize(runs: list, args: argparse.Namespace) -> dict:
+    """The figures over the runs so far (written after every seed, so a cut-short run still reports)."""
     ok = [r for r in runs if "error" not in r]
     all_out = [r for r in ok if r["fires_total"] == 8 and r["fires_extinguished"] == 8]
     res = {
@@ -75,10 +58,38 @@ def main() -> int:
                                             "all_out_time_s", "crashes", "real_time_factor", "end_reason",
                                             "min_separation_m", "error")} for r in runs],
     }
-    print(json.dumps({k: v for k, v in res.items() if k != "per_seed"}, indent=2))
+    res["seeds_requested"] = args.seeds
     os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
     with open(os.path.join(ROOT, "bench", "results", "mission.json"), "w", encoding="utf-8") as f:
         json.dump(res, f, indent=2)
+    return res
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=int(os.environ.get("MISSION_BENCH_SEEDS", "10")))
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--rtf", type=float, default=4.0)
+    ap.add_argument("--uavs", type=int, default=3)
+    ap.add_argument("--duration", type=float, default=1200.0)
+    ap.add_argument("--runs-dir", default="/tmp/mbzirc_bench_mission",
+                    help="where each trial's folder (summary, report, logs) goes")
+    args = ap.parse_args()
+    out_root = args.runs_dir
+    runs = []
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        s = run_seed(seed, args, out_root)
+        runs.append(s)
+        if "error" in s:
+            print(f"seed {seed}: FAILED to run: {s['error'][-300:]}", flush=True)
+        else:
+            print(f"seed {seed}: {s['fires_extinguished']}/{s['fires_total']} out, score {s['score']}, "
+                  f"all out at {s.get('all_out_time_s')} s, crashes {s['crashes'] or 'none'}, "
+                  f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
+        summarize(runs, args)
+    res = summarize(runs, args)
+    print(json.dumps({k: v for k, v in res.items() if k != "per_seed"}, indent=2))
+    ok = [r for r in runs if "error" not in r]
     return 0 if ok else 1
 
 

@@ -89,10 +89,10 @@ def main() -> None:
             s.range_max = sim2d.RANGE_MAX
             s.ranges = scans[k].tolist()
             bag.write(f"/{NS}/scan", s, stamp)
-    # Wall surface points seen by the laser (noise-free) from every 5th pose.
+    # Wall surface points seen by the laser (noise-free) along the flight.
     pts = []
     ang = sim2d.ANGLE_MIN + sim2d.ANGLE_INCREMENT * np.arange(sim2d.N_BEAMS)
-    for k in range(0, len(flight.poses), 5):
+    for k in range(len(flight.poses)):
         x, y, yaw = flight.poses[k]
         r = clean[k]
         ok = np.isfinite(r)
@@ -104,7 +104,7 @@ def main() -> None:
     meta = {"world": world.source, "start_pose": [float(v) for v in flight.poses[0]],
             "final_pose": [float(v) for v in flight.poses[-1]], "n_scans": int(len(flight.poses)),
             "duration": float(flight.t[-1]), "laser_noise": NOISE,
-            "wall_points": walls.tolist()}
+            "wall_points": walls.tolist(), "wall_segments": np.round(world.segments, 4).tolist()}
     with open(os.path.join(out, "floor1_fast_walls.json"), "w") as f:
         json.dump(meta, f, separators=(",", ":"))
     print(f"{bag_path}: {len(flight.poses)} scans, {flight.t[-1]:.1f} s, "

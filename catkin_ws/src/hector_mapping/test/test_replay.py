@@ -17,8 +17,9 @@ import rostest
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.srv import GetMap
-from scipy.spatial import cKDTree
 from std_srvs.srv import SetBool, Trigger
+
+from hector_mapping.indoor import map_wall_check
 
 NS = "mbzirc2020_1"
 
@@ -136,20 +137,18 @@ class ReplayTest(unittest.TestCase):
         occ = np.argwhere(data == 100)                     # (row = iy, col = ix)
         self.assertGreater(len(occ), 500)
         self.assertGreater(np.count_nonzero(data == 0), 10 * len(occ))
+        # Occupied cell centres, map frame -> arena frame (the map frame is the true start pose).
         ox, oy = grid.info.origin.position.x, grid.info.origin.position.y
-        walls = self.to_map(np.array(self.meta["wall_points"]))
-        wall_cells = np.stack([(walls[:, 0] - ox) / res - 0.5, (walls[:, 1] - oy) / res - 0.5], axis=1)
-        occ_xy = occ[:, ::-1].astype(float)
-        # Every seen wall point has an occupied cell within one cell (Chebyshev, + rounding).
-        d_wall, _ = cKDTree(occ_xy).query(wall_cells, p=np.inf)
-        frac_walls = float(np.mean(d_wall <= 1.5))
-        # And the occupied cells lie on the walls: within one cell of a true wall point.
-        d_occ, _ = cKDTree(wall_cells).query(occ_xy, p=np.inf)
-        frac_occ = float(np.mean(d_occ <= 1.5))
-        rospy.loginfo(f"replay map: {len(occ)} occupied cells, {frac_walls:.3f} of wall points covered, "
-                      f"{frac_occ:.3f} of occupied cells on walls")
-        self.assertGreater(frac_walls, 0.95)
-        self.assertGreater(frac_occ, 0.95)
+        cx = ox + (occ[:, 1] + 0.5) * res
+        cy = oy + (occ[:, 0] + 0.5) * res
+        x0, y0, th = self.meta["start_pose"]
+        c, s = math.cos(th), math.sin(th)
+        occ_arena = np.stack([x0 + c * cx - s * cy, y0 + s * cx + c * cy], axis=1)
+        check = map_wall_check(occ_arena, np.array(self.meta["wall_points"]),
+                               np.array(self.meta["wall_segments"]), res)
+        rospy.loginfo(f"replay map: {len(occ)} occupied cells, {check}")
+        self.assertGreater(check["on_wall"], 0.98)          # occupied cells lie within a cell of a wall
+        self.assertGreater(check["coverage"], 0.95)         # and the walls the laser saw are in the map
 
     def test_6_pause_and_reset_services(self):
         pause = rospy.ServiceProxy("pause_mapping", SetBool)

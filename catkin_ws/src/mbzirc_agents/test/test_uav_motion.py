@@ -22,6 +22,16 @@ class TestUavMotion(unittest.TestCase):
         rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
         assert wait_wall(lambda: 2 in cls.sim.poses and 3 in cls.sim.poses, 60), 'no /sim/robots'
 
+    def test_0_introspection(self):
+        """Every agent publishes its SMACH structure and status under its namespace."""
+        from smach_msgs.msg import SmachContainerStructure, SmachContainerStatus
+        st = rospy.wait_for_message('/mbzirc2020_2/smach/container_structure', SmachContainerStructure, 30)
+        self.assertIn('DEFAULT', st.children)
+        self.assertIn('extinguish_facade_fire', st.children)
+        self.assertIn('go_to', st.children)
+        status = rospy.wait_for_message('/mbzirc2020_3/smach/container_status', SmachContainerStatus, 30)
+        self.assertEqual(list(status.active_states), ['DEFAULT'])
+
     def test_1_bad_goals_aborted_with_message(self):
         for fields, words in (({'waypoint': pose(float('nan'), 0, 3)}, 'NaN'),
                               ({'waypoint': pose(0, 500, 3)}, 'outside the arena')):
@@ -45,6 +55,10 @@ class TestUavMotion(unittest.TestCase):
         self.assertEqual(c3.get_state(), GoalStatus.SUCCEEDED, c3.get_result().message)
         self.assertAlmostEqual(self.sim.poses[2][2], 3.0, delta=0.3)
         # UAV 3 hovers on UAV 2's way: UAV 2 must wait for the region
+        from smach_msgs.msg import SmachContainerStatus
+        active = set()
+        sub = rospy.Subscriber('/mbzirc2020_2/smach/container_status', SmachContainerStatus,
+                               lambda m: active.update(m.active_states))
         fb = []
         g2 = client(2, 'go_to', 'GoTo')
         g2.send_goal(GoToGoal(waypoint=pose(0, 8, 3)), feedback_cb=lambda f: fb.append(f.state))
@@ -59,6 +73,8 @@ class TestUavMotion(unittest.TestCase):
         self.assertEqual(g2.get_state(), GoalStatus.SUCCEEDED, g2.get_result().message)
         time.sleep(0.5)
         self.assertLess(math.dist(self.sim.poses[2], (0, 8, 3)), 0.3)
+        sub.unregister()
+        self.assertIn('go_to', active)           # the viewer saw what the UAV was doing
         self.assertGreater(self.sim.min_distance, 1.0)
         self.assertEqual(self.crashed, [])
 
@@ -83,7 +99,7 @@ class TestUavMotion(unittest.TestCase):
         for r in (2, 3):
             state, res = run(r, 'land', 'Land', 60)
             self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
-            self.assertLess(self.sim.poses[r][2], 0.2)
+            self.assertTrue(wait_wall(lambda: self.sim.poses[r][2] < 0.2, 3), self.sim.poses[r])
         self.assertEqual(self.crashed, [])
 
     def test_5_heartbeat_loss(self):

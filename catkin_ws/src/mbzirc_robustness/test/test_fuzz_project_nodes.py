@@ -38,7 +38,9 @@ class TestFuzzProjectNodes(unittest.TestCase):
         fuzzer = GraphFuzzer(max_cases=int(rospy.get_param("~max_cases", 30)),
                              rate_hz=float(rospy.get_param("~rate", 30.0)),
                              seed=int(rospy.get_param("~seed", 0)),
-                             exclude_nodes=rospy.get_param("~exclude_nodes", ["/rosout"]))
+                             exclude_nodes=rospy.get_param("~exclude_nodes", ["/rosout"]),
+                             exclude_topics=rospy.get_param("~exclude_topics", ["/clock", "/rosout", "/rosout_agg"]),
+                             exclude_cases=rospy.get_param("~exclude_cases", []))
         cls.data = fuzzer.run().to_dict()
         print(format_fuzz_summary(cls.data), flush=True)
         path = rospy.get_param("~report_path", "") or os.path.join(

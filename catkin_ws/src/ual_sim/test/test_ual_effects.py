@@ -143,6 +143,11 @@ class TestEffects(unittest.TestCase):
         with self.assertRaises(rospy.ROSException):
             msg("/mbzirc2020_2/scan", LaserScan, timeout=0.3)
         self.assertEqual(len(msg("/mbzirc2020_2/scan", LaserScan, timeout=10).ranges), 720)
+        # comm_loss: no pose out for its duration, then back
+        self.assertTrue(fault(1, "comm_loss", 3.0).success)
+        with self.assertRaises(rospy.ROSException):
+            msg("/mbzirc2020_1/ual/pose", PoseStamped, timeout=0.3)
+        self.assertIsNotNone(msg("/mbzirc2020_1/ual/pose", PoseStamped, timeout=10))
 
 
 if __name__ == "__main__":

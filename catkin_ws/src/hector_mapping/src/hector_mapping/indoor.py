@@ -31,11 +31,13 @@ FLOOR1_LOOP = [(21.0, 9.0), (22.8, 13.0), (21.0, 17.8), (19.2, 14.0), (19.2, 11.
 
 @dataclass
 class IndoorWorld:
-    """A laser ray caster ``scan(x, y, yaw) -> ranges (720,)`` and where it comes from."""
+    """A laser ray caster ``scan(x, y, yaw) -> ranges (720,)``, the walls at laser height as segments
+    (M, 4) in the arena frame, the flight loop, and where it all comes from."""
 
     scan: Callable[[float, float, float], np.ndarray]
     source: str
     loop: list
+    segments: np.ndarray
 
 
 def _import_ual_sim():
@@ -61,13 +63,17 @@ def world_source(prefer_ual_sim: bool = True) -> IndoorWorld:
     if mod is not None:
         w = mod.load_world()
         z = FLIGHT_Z + LASER_Z_OFFSET
+        sel = (w.bmin[:, 2] <= z) & (z <= w.bmax[:, 2])
+        segs = []
+        for (x0, y0), (x1, y1) in zip(w.bmin[sel, :2], w.bmax[sel, :2]):
+            segs += [(x0, y0, x1, y0), (x1, y0, x1, y1), (x1, y1, x0, y1), (x0, y1, x0, y0)]
         return IndoorWorld(lambda x, y, yaw: w.laser_scan(x, y, z, yaw),
                            "ual_sim.world (c3_default.yaml, tower first floor, laser at z 6.3 m)",
-                           FLOOR1_LOOP)
+                           FLOOR1_LOOP, np.array(segs, np.float64))
     seg = sim2d.tower_floor()
     return IndoorWorld(lambda x, y, yaw: seg.raycast(x, y, yaw),
                        "hector_mapping.sim2d.tower_floor (stand-in, ual_sim not importable)",
-                       sim2d.TOWER_LOOP)
+                       sim2d.TOWER_LOOP, seg.segments)
 
 
 def slow_flight(world: IndoorWorld, rate: float = 15.0) -> sim2d.Flight:
@@ -114,3 +120,35 @@ def ate(estimates: np.ndarray, truth: np.ndarray) -> dict:
     d1 = np.linalg.norm(aligned - b, axis=1)
     return {"ate_rms": float(np.sqrt(np.mean(d1 ** 2))), "ate_max": float(d1.max()),
             "start_aligned_rms": float(np.sqrt(np.mean(d0 ** 2))), "start_aligned_max": float(d0.max())}
+
+
+def distance_to_segments(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """Distance (N,) from each point (N, 2) to the nearest segment (M, 4: x0, y0, x1, y1)."""
+    p = np.asarray(points, np.float64)[:, None, :]
+    a = segments[None, :, :2]
+    ab = segments[None, :, 2:] - a
+    t = np.clip(np.sum((p - a) * ab, axis=2) / np.maximum(np.sum(ab * ab, axis=2), 1e-12), 0.0, 1.0)
+    d = p - (a + t[..., None] * ab)
+    return np.sqrt(np.min(np.sum(d * d, axis=2), axis=1))
+
+
+def map_wall_check(occupied_xy: np.ndarray, seen_wall_xy: np.ndarray, segments: np.ndarray,
+                   resolution: float) -> dict:
+    """How well the occupied cells of a map (centres, arena frame) match the world's walls.
+
+    Returns ``on_wall``: fraction of occupied cells whose centre is within one cell of a wall surface
+    (``resolution`` plus half a cell diagonal, since a wall surface anywhere inside a cell makes that
+    cell occupied); ``p99_distance`` / ``max_distance`` of occupied cells to the walls (m); and
+    ``coverage``: fraction of wall points seen by the laser with an occupied cell within one cell.
+    """
+    d = distance_to_segments(occupied_xy, segments)
+    tol = resolution * (1.0 + math.sqrt(0.5))
+    near = np.zeros(len(seen_wall_xy), bool)
+    if len(occupied_xy) and len(seen_wall_xy):
+        from scipy.spatial import cKDTree  # noqa: PLC0415 - only the checks need scipy
+        dist, _ = cKDTree(occupied_xy).query(seen_wall_xy, p=np.inf)
+        near = dist <= 1.5 * resolution
+    return {"on_wall": float(np.mean(d <= tol)) if len(d) else 0.0,
+            "p99_distance": float(np.percentile(d, 99)) if len(d) else math.inf,
+            "max_distance": float(d.max()) if len(d) else math.inf,
+            "coverage": float(np.mean(near)) if len(near) else 0.0}

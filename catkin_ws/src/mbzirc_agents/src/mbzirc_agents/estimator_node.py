@@ -1,8 +1,9 @@
 """ROS adapter of the object estimator: every robot's `sensed_objects` in, `estimated_objects` out.
 
 Params (defaults): `~robot_ids` ([0, 1, 2, 3]: subscribes `/mbzirc2020_<id>/sensed_objects`),
-`~min_updates` (5), `~lost_time` (10 s), `~fire_gate` (2.0 m), `~hole_gate` (0.4 m),
-`~covariance_x/y/z` (1.5/1.5/0.5 m, used when a detection has no valid covariance), `~rate` (5 Hz),
+`~min_updates` (5), `~lost_time` (10 s), `~fire_gate` (5.0 m), `~hole_gate` (0.4 m) (Euclidean caps),
+`~chi2_gate` (16.27: Mahalanobis gate, 99.9 % for 3 dof), `~covariance_x/y/z` (1.5/1.5/0.5 m^2 variances,
+used when a detection has no valid covariance), `~rate` (5 Hz),
 `~publish_tentative` (false), `~global_frame` ('arena').
 """
 from __future__ import annotations
@@ -27,8 +28,9 @@ class EstimatorNode:
         cov = (rospy.get_param('~covariance_x', 1.5), rospy.get_param('~covariance_y', 1.5),
                rospy.get_param('~covariance_z', 0.5))
         self.core = ObjectEstimator(
-            gates={C.TYPE_FIRE: float(rospy.get_param('~fire_gate', 2.0)),
+            gates={C.TYPE_FIRE: float(rospy.get_param('~fire_gate', 5.0)),
                    C.TYPE_HOLE: float(rospy.get_param('~hole_gate', 0.4))},
+            chi2_gate=float(rospy.get_param('~chi2_gate', 16.27)),
             min_updates=int(rospy.get_param('~min_updates', 5)),
             lost_time=float(rospy.get_param('~lost_time', 10.0)), default_covariance=cov)
         self.publish_tentative = bool(rospy.get_param('~publish_tentative', False))

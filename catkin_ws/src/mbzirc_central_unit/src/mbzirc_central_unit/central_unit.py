@@ -226,9 +226,12 @@ class CentralUnit:
             if self.strategy.in_flight.get(cmd.agent_id) is not cmd:
                 continue  # a goal we gave up (silent agent)
             ok = status == GoalStatus.SUCCEEDED
-            busy = str(res.get("message", "")).startswith("busy")
-            if busy:
-                self.strategy.in_flight.pop(cmd.agent_id, None)
+            msg = str(res.get("message", ""))
+            # Not the task's fault: the agent was busy, or refused goals (e.g. until it hears our heartbeat
+            # again after a restart). Try again later without counting a failure.
+            not_tried = status == GoalStatus.REJECTED or msg.startswith("busy") or "heartbeat" in msg
+            if not_tried:
+                self.strategy.forget(cmd)
             else:
                 self.strategy.on_result(cmd, ok, res)
             level = rospy.loginfo if ok else rospy.logwarn

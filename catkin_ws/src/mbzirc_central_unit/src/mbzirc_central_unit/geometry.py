@@ -214,7 +214,12 @@ def ground_search_path(start: Sequence[float], altitude: float = C.GROUND_SEARCH
     while left:
         nxt = min(left, key=lambda c: math.dist(cur, c[:2]))
         left.remove(nxt)
-        out.append((nxt[0], nxt[1], altitude, 0.0))
+        # Two waypoints 0.6 m apart over each holder: the UAV slows down and stops above it, so the fire
+        # stays in the narrow downward field of view for the detector's frame filter (> 1 s).
+        dx, dy = nxt[0] - cur[0], nxt[1] - cur[1]
+        n = math.hypot(dx, dy) or 1.0
+        out.append((nxt[0] - 0.3 * dx / n, nxt[1] - 0.3 * dy / n, altitude, 0.0))
+        out.append((nxt[0] + 0.3 * dx / n, nxt[1] + 0.3 * dy / n, altitude, 0.0))
         cur = nxt[:2]
     return out
 

@@ -37,7 +37,7 @@ def write_report(rec: MissionRecord, path: str, title: str = "") -> None:
         when = f"out {f.t_extinguished:.0f}s" if f.extinguished and f.t_extinguished is not None else \
             f"{100 * f.progress:.0f}%"
         ax.annotate(f"{f.kind} F{f.floor}: {when}", (f.position[0], f.position[1]), fontsize=7,
-                    xytext=(4, 4), textcoords="offset points")
+                    xytext=(4, 4 + 9 * f.floor), textcoords="offset points")  # floors share x, y
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

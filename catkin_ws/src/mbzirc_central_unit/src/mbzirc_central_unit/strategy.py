@@ -29,6 +29,9 @@ from .layout import Layout, Room
 from .world_model import AgentView, FireView, WorldView
 
 
+# The blanket UAV's searches in turn: the known outdoor holders (quick), then a sweep of the open area.
+GROUND_SEARCH_PLAN = ("holders", "holders", "sweep", "holders", "sweep")
+PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
 
 
@@ -78,6 +81,8 @@ class Strategy:
         self.in_flight: dict[str, Command] = {}
         self.last_done: dict[str, Command] = {}
         self.finished: set[str] = set()  # agents sent home for good
+        # Fire ids a search just reported, not yet in /estimated_objects: the agent waits a few ticks.
+        self.pending_ids: dict[str, tuple[set[int], int]] = {}
 
     # ---- bookkeeping -----------------------------------------------------------------------------
     def altitude(self, agent_id: str) -> float:
@@ -108,6 +113,8 @@ class Strategy:
         self.in_flight.pop(cmd.agent_id, None)
         if succeeded:
             self.last_done[cmd.agent_id] = cmd
+            if result.get("fire_ids"):
+                self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
             if cmd.task == C.SEARCH_FACADE:
                 self.facade_searches[cmd.target] += 1
             elif cmd.task == C.SEARCH_INDOOR:
@@ -194,6 +201,8 @@ class Strategy:
             a = world.agents[agent_id]
             if not a.alive(world.now, self.p.agent_timeout) or agent_id in self.in_flight or not a.is_idle:
                 continue
+            if self._waiting_for_reported_fires(agent_id, world):
+                continue
             if not a.is_uav:
                 cmd = self._decide_ugv(a, world)
             elif a.payload == C.PAYLOAD_BLANKET:
@@ -204,6 +213,15 @@ class Strategy:
                 self.on_sent(cmd)  # in flight at once: later decisions of this tick see it
                 out.append(cmd)
         return out
+
+    def _waiting_for_reported_fires(self, agent_id: str, world: WorldView) -> bool:
+        """True while fires the agent's last search reported have not reached /estimated_objects yet."""
+        ids, ticks = self.pending_ids.get(agent_id, (set(), 0))
+        if not ids or ids & set(world.fires) or ticks <= 0:
+            self.pending_ids.pop(agent_id, None)
+            return False
+        self.pending_ids[agent_id] = (ids, ticks - 1)
+        return True
 
     def work_left(self, world: WorldView) -> bool:
         """True while some fire may still be found or put out by the robots alive."""
@@ -232,7 +250,7 @@ class Strategy:
         out = sum(1 for f in world.fires_of(C.KIND_GROUND, actionable=False) if f.extinguished)
         if out >= self.p.num_ground_fires:
             return False
-        return bool(world.fires_of(C.KIND_GROUND)) or self.ground_searches < 3
+        return bool(world.fires_of(C.KIND_GROUND)) or self.ground_searches < len(GROUND_SEARCH_PLAN)
 
     def _decide_blanket(self, a: AgentView, world: WorldView) -> Optional[Command]:
         left = self._ground_work_left(world)
@@ -250,7 +268,7 @@ class Strategy:
             return Command(a.agent_id, C.EXTINGUISH_GROUND_FIRE, {"fire_id": f.fire_id},
                            f"blanket on ground fire {f.fire_id}", f.fire_id)
         alt = self.altitude(a.agent_id)
-        if self.ground_searches < 2:
+        if GROUND_SEARCH_PLAN[min(self.ground_searches, len(GROUND_SEARCH_PLAN) - 1)] == "holders":
             path = G.ground_search_path(a.position, alt, self.p.layout.ground_holders)
             return Command(a.agent_id, C.LOOK_FOR_GROUND_FIRES, {"path": path}, "outdoor fire holders",
                            "holders")

@@ -76,8 +76,9 @@ class FireView:
 
     @property
     def actionable(self) -> bool:
-        """A fire worth sending a robot to: tracked and not out (a LOST or INACTIVE track is not)."""
-        return self.status in (C.STATUS_ACTIVE, C.STATUS_DETECTED)
+        """A fire worth sending a robot to: not out. LOST counts (an indoor fire is lost as soon as the
+        robot looks away); INACTIVE does not."""
+        return self.status in (C.STATUS_ACTIVE, C.STATUS_DETECTED, C.STATUS_LOST)
 
 
 def classify_fire(sub_type: int, x: float, y: float, z: float) -> str:
@@ -96,6 +97,9 @@ def classify_fire(sub_type: int, x: float, y: float, z: float) -> str:
     return C.KIND_GROUND
 
 
+DUPLICATE_RADIUS = 2.0  # m
+
+
 @dataclass
 class WorldView:
     """Snapshot the strategy decides on."""
@@ -107,8 +111,14 @@ class WorldView:
         """Fires of a kind (and floor), only actionable ones by default, in id order."""
         out = [f for f in self.fires.values() if f.kind == kind and (floor is None or f.floor == floor)]
         if actionable:
-            out = [f for f in out if f.actionable]
+            out = [f for f in out if f.actionable and not self.duplicate_of_out(f)]
         return sorted(out, key=lambda f: f.fire_id)
+
+    def duplicate_of_out(self, fire: FireView, radius: float = DUPLICATE_RADIUS) -> bool:
+        """A LOST track next to a fire already out is a stray detection of that fire (or of its decoys)."""
+        return fire.status == C.STATUS_LOST and any(
+            o.extinguished and o.kind == fire.kind and math.dist(o.position, fire.position) < radius
+            for o in self.fires.values() if o.fire_id != fire.fire_id)
 
     def extinguished_on(self, kind: str, floor: Optional[int] = None) -> bool:
         """True if a fire of that kind (and floor) is known to be out."""

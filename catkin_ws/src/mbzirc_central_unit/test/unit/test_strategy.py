@@ -180,12 +180,12 @@ def test_known_fire_is_approached_then_extinguished():
     assert (c2.task, c2.goal["fire_id"]) == (C.EXTINGUISH_FACADE_FIRE, 7)
 
 
-def test_extinguished_and_lost_fires_are_not_targets():
+def test_extinguished_fires_and_their_stray_tracks_are_not_targets():
     s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
     a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 0, 0, 5, ual_state=C.UAL_FLYING_AUTO, water_level=1.0,
                   last_seen=0.0)
     fires = {1: FireView(1, 24.2, 8.2, 8.25, C.KIND_FACADE, C.STATUS_EXTINGUISHED),
-             2: FireView(2, 11.4, 8.5, 12.5, C.KIND_FACADE, C.STATUS_LOST)}
+             2: FireView(2, 24.2, 9.0, 8.0, C.KIND_FACADE, C.STATUS_LOST)}  # a stray track of fire 1
     cmds = s.decide(WorldView(0.0, {"2": a}, fires))
     assert all(c.task in (C.FOLLOW_PATH, C.GO_HOME_AND_REFILL) and c.target in (None, ("transit", None))
                for c in cmds)
@@ -236,3 +236,22 @@ def test_layout_from_the_simulator_world_file_matches_the_defaults():
     assert {f: [r.entry for r in rs] for f, rs in loaded.rooms.items()} == \
         {f: [r.entry for r in rs] for f, rs in default.rooms.items()}
     assert set(loaded.rooms) == {0, 1, 2} and len(loaded.rooms[1]) == 2 and len(loaded.rooms[2]) == 2
+
+
+def test_lost_fires_are_targets_unless_next_to_one_already_out():
+    w = WorldView(0.0, {}, {1: FireView(1, 17.7, 8.5, 6.5, C.KIND_INDOOR, C.STATUS_LOST),
+                            2: FireView(2, 24.2, 17.75, 6.0, C.KIND_FACADE, C.STATUS_EXTINGUISHED),
+                            3: FireView(3, 24.2, 18.5, 6.2, C.KIND_FACADE, C.STATUS_LOST)})
+    assert [f.fire_id for f in w.fires_of(C.KIND_INDOOR)] == [1]
+    assert w.fires_of(C.KIND_FACADE) == []
+
+
+def test_agent_waits_for_the_fires_its_search_reported():
+    s = Strategy()
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *G.viewpoint((24.2, 8.2, 8.25))[:3],
+                  ual_state=C.UAL_FLYING_AUTO, water_level=2.0, last_seen=0.0)
+    cmd = s.decide(WorldView(0.0, {"2": a}, {}))[0]
+    s.on_result(cmd, True, {"fire_ids": [7]})
+    assert s.decide(WorldView(0.0, {"2": a}, {})) == []   # fire 7 not in /estimated_objects yet
+    w = WorldView(0.0, {"2": a}, {7: FireView(7, 24.2, 8.2, 8.25, C.KIND_FACADE)})
+    assert s.decide(w)[0].goal["fire_id"] == 7

@@ -16,15 +16,18 @@ DEFAULT_RATE_HZ = 20.0          # malformed messages per second per topic (keeps
 CONNECT_TIMEOUT_S = 3.0         # wait for subscribers to connect to the fuzz publisher
 SERVICE_CALL_TIMEOUT_S = 3.0    # a service that does not answer within this is reported as hung
 MAX_SERVICE_TIMEOUTS = 2        # stop fuzzing a service after this many unanswered calls
-SETTLE_S = 0.5                  # after each topic: let the callbacks run before checking liveness
+SETTLE_S = 0.3                  # after each topic: let the callbacks run before checking liveness
 XMLRPC_TIMEOUT_S = 3.0          # getPid on a node
 DEFAULT_EXCLUDE_TOPICS = ("/clock", "/rosout", "/rosout_agg")
 DEFAULT_EXCLUDE_SERVICES = ("*/get_loggers", "*/set_logger_level")
 DEFAULT_EXCLUDE_NODES = ("/rosout",)
+DISCOVERY_PASSES = 2            # nodes subscribe lazily (e.g. a tf listener made on first use): look again
 ERROR_LEVELS = (8, 16)          # rosgraph_msgs/Log ERROR, FATAL
 WARN_LEVEL = 4
 # error lines rospy itself logs under the node's name: they do not show that the node checks its input
-FRAMEWORK_ERRORS = ("Characters replaced when decoding message", "Unable to deserialize")
+FRAMEWORK_ERRORS = ("Characters replaced when decoding message", "Unable to deserialize",
+                    "Attempt to get a goal id on an uninitialized",  # actionlib's own checks
+                    "Got a transition callback on a goal handle", "The goal handle is not tracking")
 
 # ---- network-namespace harness ---------------------------------------------------------------------
 NETNS_PREFIX = "mbzr"           # namespaces are named <prefix>-<owner pid>-<host>

@@ -44,21 +44,22 @@ class Fault:
 
 def default_schedule(uavs: int = 3, link_cut_s: float = 60.0, start_s: float = 40.0,
                      spacing_s: float = 25.0) -> list[Fault]:
-    """The issue's scenarios: kill -9 of a detector, an agent, the estimator and the central unit, then
-    UAV 2's link cut for ``link_cut_s`` and UAV 3's for good (with fewer UAVs, the last ones present)."""
+    """The issue's scenarios, link cuts first (judged on an otherwise healthy system): UAV 2's link cut
+    for ``link_cut_s`` and UAV 3's for good; once UAV 2 is back, kill -9 of a detector, an agent, the
+    estimator and the central unit (last: without it nothing else can be judged). With fewer UAVs the cuts
+    go to the last UAVs present."""
     cut_temp = str(min(2, uavs))
     cut_perm = str(uavs) if uavs >= 3 else None
-    t = start_s
-    sched = []
+    sched = [Fault(KIND_LINK_CUT, cut_temp, start_s, duration_s=link_cut_s)]
+    if cut_perm:
+        sched.append(Fault(KIND_LINK_CUT_PERMANENT, cut_perm, start_s + spacing_s))
+    t = start_s + link_cut_s + spacing_s
     for node, check, robot in ((f"/mbzirc2020_{cut_temp}/fire_detector", CHECK_PROCESS, cut_temp),
                                ("/mbzirc2020_1/agent", CHECK_DATA_FEED, "1"),
                                ("/object_estimator", CHECK_TRACKS, None),
                                ("/central_unit", CHECK_HEARTBEAT, None)):
         sched.append(Fault(KIND_CRASH, node, t, check=check, robot=robot))
         t += spacing_s
-    sched.append(Fault(KIND_LINK_CUT, cut_temp, t, duration_s=link_cut_s))
-    if cut_perm:
-        sched.append(Fault(KIND_LINK_CUT_PERMANENT, cut_perm, t + spacing_s))
     return sched
 
 

@@ -8,6 +8,7 @@ Wall-clock sleeps only: it must work under ``/use_sim_time`` even when nothing p
 """
 from __future__ import annotations
 
+import os
 import threading
 import time
 from dataclasses import dataclass, field
@@ -87,13 +88,15 @@ class GraphFuzzer:
         seed: the generator's seed (same seed, same inputs).
         exclude_*: name patterns never to fuzz.
         call_timeout: a service call that takes longer is reported as hung.
+        exclude_cases: ``"<input>: <case label>"`` patterns never sent (a known fatal input of a library,
+            so that the rest of that input is still fuzzed).
     """
 
     def __init__(self, target_nodes: list[str] | None = None, max_cases: int = C.DEFAULT_MAX_CASES,
                  rate_hz: float = C.DEFAULT_RATE_HZ, seed: int = 0,
                  exclude_nodes: list[str] | None = None, exclude_topics: list[str] | None = None,
                  exclude_services: list[str] | None = None,
-                 call_timeout: float = C.SERVICE_CALL_TIMEOUT_S) -> None:
+                 call_timeout: float = C.SERVICE_CALL_TIMEOUT_S, exclude_cases: list[str] | None = None) -> None:
         self.target_nodes = list(target_nodes or [])
         self.max_cases = max_cases
         self.period = 1.0 / max(rate_hz, 0.1)
@@ -103,6 +106,7 @@ class GraphFuzzer:
         self.exclude_services = list(exclude_services if exclude_services is not None
                                      else C.DEFAULT_EXCLUDE_SERVICES)
         self.call_timeout = call_timeout
+        self.exclude_cases = list(exclude_cases or [])
         self.me = rospy.get_name()
         self.master = rosgraph.Master(self.me)
         self.my_uri = rospy.get_node_uri() or ""
@@ -127,20 +131,17 @@ class GraphFuzzer:
         sink = _LogSink(set(nodes))
         sub = rospy.Subscriber("/rosout", Log, sink, queue_size=500)
         time.sleep(0.5)  # let /rosout publishers connect to us
+        done: set[tuple[str, str]] = set()
         try:
-            for tg in targets:
-                if rospy.is_shutdown():
+            for _ in range(C.DISCOVERY_PASSES):
+                todo = [tg for tg in targets if (tg.kind, tg.name) not in done
+                        and all(n in report.nodes for n in tg.nodes)]
+                if not todo or rospy.is_shutdown():
                     break
-                alive = [n for n in tg.nodes if report.nodes[n]["alive"]]
-                if not alive:
-                    report.add_skipped(tg.name, "every node behind it already died")
-                    continue
-                sink.current = tg.name
-                rospy.loginfo("fuzzing %s %s (%s) -> %s", tg.kind, tg.name, tg.type or "?", ", ".join(alive))
-                if tg.kind == G.KIND_SERVICE:
-                    self._fuzz_service(tg, report)
-                else:
-                    self._fuzz_topic(tg, report)
+                for tg in todo:
+                    done.add((tg.kind, tg.name))
+                    self._fuzz_one(tg, report, sink)
+                targets = self.targets()  # inputs created while we fuzzed (lazy subscribers)
             time.sleep(C.SETTLE_S)
             for n in nodes:
                 if report.nodes[n]["alive"]:
@@ -155,6 +156,24 @@ class GraphFuzzer:
                 report.add_log(line)
         return report
 
+    def _cases(self, tg: G.Target, cls: type) -> list[FuzzCase]:
+        cases = generate_cases(cls, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        return [c for c in cases if not G.matches(f"{tg.name}: {c.label}", self.exclude_cases)]
+
+    def _fuzz_one(self, tg: G.Target, report: FuzzReport, sink: _LogSink) -> None:
+        if rospy.is_shutdown():
+            return
+        alive = [n for n in tg.nodes if report.nodes[n]["alive"]]
+        if not alive:
+            report.add_skipped(tg.name, "every node behind it already died")
+            return
+        sink.current = tg.name
+        rospy.loginfo("fuzzing %s %s (%s) -> %s", tg.kind, tg.name, tg.type or "?", ", ".join(alive))
+        if tg.kind == G.KIND_SERVICE:
+            self._fuzz_service(tg, report)
+        else:
+            self._fuzz_topic(tg, report)
+
     # -----------------------------------------------------------------------------------------------
     def _check(self, tg: G.Target, report: FuzzReport, label: str) -> None:
         """Record a death (no answer, or a new pid after a respawn) of any node behind ``tg``."""
@@ -164,7 +183,10 @@ class GraphFuzzer:
                 if pid is None:  # a busy node on a loaded machine can miss a 1 s deadline: ask again, patiently
                     time.sleep(0.5)
                     pid = G.query_pid(self.master, n, self.me, timeout=C.XMLRPC_TIMEOUT_S * 2)
-                report.set_pid_after(n, pid, f"{tg.name}: {label}")
+                old = report.nodes[n]["pid_before"]
+                hung = pid is None and old is not None and os.path.exists(f"/proc/{old}")
+                report.set_pid_after(n, pid, f"{tg.name}: {label}"
+                                     + (" (process still there but not answering: hung)" if hung else ""))
 
     def _wait_connected(self, tg: G.Target, pub: rospy.Publisher) -> list[str]:
         """Nodes behind ``tg`` that connected to our publisher (per their own getBusInfo)."""
@@ -186,7 +208,7 @@ class GraphFuzzer:
         except Exception as exc:  # noqa: BLE001 - a type we cannot load is reported, not fatal
             report.add_skipped(tg.name, f"cannot load message type {tg.type}: {exc}")
             return
-        cases = generate_cases(cls, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        cases = self._cases(tg, cls)
         pub = rospy.Publisher(tg.name, raw_message_class(cls), queue_size=len(cases) + 1)
         self._pubs.append(pub)
         connected = self._wait_connected(tg, pub)
@@ -212,7 +234,7 @@ class GraphFuzzer:
         except Exception as exc:  # noqa: BLE001
             report.add_skipped(tg.name, f"cannot load service type {tg.type!r}: {exc}")
             return
-        cases = generate_cases(srv_cls._request_class, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        cases = self._cases(tg, srv_cls._request_class)
         proxy = rospy.ServiceProxy(tg.name, raw_service_class(srv_cls))
         outcomes: list[tuple[str, str]] = []
         for case in cases:

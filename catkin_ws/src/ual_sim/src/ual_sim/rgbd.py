@@ -71,23 +71,42 @@ class RGBDCamera:
         if len(sel):
             dirs = fwd[None, :] + g.xu[:, None] * right[None, :]          # (w, 2)
             zin, zout = _slab_intervals(cam[:2], dirs, world.bmin[sel, :2], world.bmax[sel, :2])
-            order = np.argsort(np.where(np.isfinite(zin), np.maximum(zin, 0.0), np.inf).min(axis=0))
-            for j in order:                                 # front to back: occluded boxes are skipped cheaply
-                b = sel[j]
-                _paint_box(g, depth, label, zin[:, j], zout[:, j], world.bmin[b, 2], world.bmax[b, 2], cz, b)
+            fin = np.isfinite(zin) & (zout > 1e-3)
+            zi_all = np.where(fin, np.maximum(zin, 1e-3), np.inf)
+            first = zi_all.min(axis=0)
+            order = np.argsort(first)
+            order = order[np.isfinite(first[order])]        # boxes no column ray meets are dropped here
+            if len(order):
+                # column span and row span of every box at once (rows from its z range at entry and exit)
+                f = fin[:, order]
+                u0 = f.argmax(axis=0)
+                u1 = g.w - f[::-1].argmax(axis=0)
+                z0s, z1s = world.bmin[sel[order], 2], world.bmax[sel[order], 2]
+                zi_o = np.where(f, zi_all[:, order], np.nan)
+                zo_o = np.where(f, zout[:, order], np.nan)
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    vs = np.stack([g.cy - g.fy * (z1s - cz) / zi_o, g.cy - g.fy * (z0s - cz) / zi_o,
+                                   g.cy - g.fy * (z1s - cz) / zo_o, g.cy - g.fy * (z0s - cz) / zo_o])
+                v0 = np.clip(np.floor(np.nanmin(vs, axis=(0, 1))), 0, g.h).astype(int)
+                v1 = np.clip(np.ceil(np.nanmax(vs, axis=(0, 1))) + 1, 0, g.h).astype(int)
+                for n, j in enumerate(order):               # front to back: occluded boxes are skipped cheaply
+                    if v0[n] >= v1[n]:
+                        continue
+                    b = sel[j]
+                    _paint_box(g, depth, label, zi_all[:, j], zout[:, j], z0s[n], z1s[n], cz, b,
+                               int(u0[n]), int(u1[n]), int(v0[n]), int(v1[n]))
+        # colour and millimetres on the coarse grid, then both up to full resolution in one copy each
+        bgr = self._palette(world).take(label, axis=0, mode="wrap")
+        dmm = _to_mm(depth)
         k = self.geo_scale
         if k > 1:
-            depth = np.repeat(np.repeat(depth, k, axis=0), k, axis=1)
-            label = np.repeat(np.repeat(label, k, axis=0), k, axis=1)
-        # fire holders
+            dmm = _upsample(dmm, k)
+            bgr = _upsample(bgr, k)
+        # fire holders at full resolution (label of the coarse grid tells what surface is seen)
         if len(fires.fires):
-            self._paint_wall_discs(depth, label, fires, cam, fwd, right)
-            self._paint_ground_discs(depth, label, fires, cam, fwd, right)
-        palette = self._palette(world)
-        bgr = palette.take(label, axis=0, mode="wrap")
-        depth[(depth < C.CAM_DEPTH_MIN) | (depth > C.CAM_DEPTH_MAX)] = 0.0
-        depth *= 1000.0
-        return bgr, depth.astype(np.uint16)
+            self._paint_wall_discs(dmm, bgr, fires, cam, fwd, right)
+            self._paint_ground_discs(dmm, bgr, label, fires, cam, fwd, right)
+        return bgr, dmm
 
     # ------------------------------------------------------------------ discs
     def _pixel_rect(self, pts: np.ndarray, cam: np.ndarray, fwd: np.ndarray, right: np.ndarray):
@@ -104,13 +123,16 @@ class RGBDCamera:
             return None
         return v0, v1, u0, u1
 
-    def _paint_wall_discs(self, depth, label, fires: FireSet, cam, fwd, right) -> None:
+    def _paint_wall_discs(self, depth, bgr, fires: FireSet, cam, fwd, right) -> None:
         """Holes and decoys: the wall is vertical, so the ray-plane depth depends on the column only."""
         span = C.DECOY_OFFSET + C.DECOY_RADIUS
-        for i in np.nonzero(fires.kind != GROUND)[0]:
+        rel = fires.pos - cam
+        ahead = rel[:, :2] @ fwd
+        cand = ((fires.kind != GROUND) & (np.einsum("fk,fk->f", rel, fires.normal) < 0.0)
+                & (ahead > C.CAM_DEPTH_MIN) & (ahead < C.CAM_DEPTH_MAX * 1.5)
+                & (np.abs(rel[:, :2] @ right) < ahead * math.tan(self.half_fov) + span))
+        for i in np.nonzero(cand)[0]:
             ctr, n, u = fires.pos[i], fires.normal[i], fires.u[i]
-            if (cam - ctr) @ n <= 0.0 or np.linalg.norm(cam - ctr) > C.CAM_DEPTH_MAX * 1.5:
-                continue
             corners = ctr + np.array([[a * span * u[0], a * span * u[1], b * span] for a in (-1, 1) for b in (-1, 1)])
             rect = self._pixel_rect(corners, cam, fwd, right)
             if rect is None:
@@ -121,20 +143,20 @@ class RGBDCamera:
                 t = ((ctr - cam) @ n) / (dh @ n[:2])                           # (w,) z-depth on the wall
             a = (cam[:2] + dh * t[:, None] - ctr[:2]) @ u[:2]                  # (w,) along the wall
             b = (cam[2] - ctr[2]) - self.kv[v0:v1, None] * t[None, :]        # (h, w) up the wall
-            blk_d = depth[v0:v1, u0:u1]
-            on_wall = np.abs(blk_d - t[None, :]) < 0.15
+            blk_d = depth[v0:v1, u0:u1]                                        # uint16 mm
+            on_wall = np.abs(blk_d.astype(np.float32) - (1000.0 * t)[None, :]) < 150.0
             if not on_wall.any():
                 continue
             b2 = b * b
             hole = on_wall & ((a * a)[None, :] + b2 < C.HOLE_RADIUS ** 2)
             decoy = on_wall & ((((a - C.DECOY_OFFSET) ** 2)[None, :] + b2 < C.DECOY_RADIUS ** 2)
                                | (((a + C.DECOY_OFFSET) ** 2)[None, :] + b2 < C.DECOY_RADIUS ** 2))
-            blk_l = label[v0:v1, u0:u1]
-            blk_l[decoy] = -2
-            blk_l[hole] = -1
-            blk_d[hole] = np.broadcast_to(t[None, :] + HOLE_DEPTH_BEHIND, hole.shape)[hole]
+            blk_c = bgr[v0:v1, u0:u1]
+            blk_c[decoy] = DECOY_BGR
+            blk_c[hole] = HOLE_BGR
+            blk_d[hole] = np.broadcast_to(_to_mm(t + HOLE_DEPTH_BEHIND)[None, :], hole.shape)[hole]
 
-    def _paint_ground_discs(self, depth, label, fires: FireSet, cam, fwd, right) -> None:
+    def _paint_ground_discs(self, depth, bgr, label, fires: FireSet, cam, fwd, right) -> None:
         """Red silk (or the blanket) on the ground: the ground depth depends on the row only."""
         r = C.GROUND_PLATE_RADIUS * 1.5            # red silk larger than the plate
         if cam[2] <= 0.05:
@@ -155,41 +177,33 @@ class RGBDCamera:
             dh = fwd[None, :] + self.xu[u0:u1, None] * right[None, :]          # (w, 2)
             px = cam[0] - ctr[0] + t[:, None] * dh[None, :, 0]
             py = cam[1] - ctr[1] + t[:, None] * dh[None, :, 1]
-            blk_l = label[v0:v1, u0:u1]
-            disc = (px * px + py * py < r * r) & (blk_l == 1)          # where the ground is what is seen
-            blk_l[disc] = -4 if f.covered else -3
-            depth[v0:v1, u0:u1][disc] = np.broadcast_to(t[:, None], disc.shape)[disc]
+            k = self.geo_scale
+            ground = label[np.arange(v0, v1) // k][:, np.arange(u0, u1) // k] == 1   # ground is what is seen
+            disc = (px * px + py * py < r * r) & ground
+            bgr[v0:v1, u0:u1][disc] = BLANKET_BGR if f.covered else SILK_BGR
+            depth[v0:v1, u0:u1][disc] = np.broadcast_to(_to_mm(t)[:, None], disc.shape)[disc]
 
     def _palette(self, world: World) -> np.ndarray:
-        """BGR colour per label; negative labels index from the end (holes, decoys, silk, blanket)."""
+        """BGR colour per label: sky, ground, then (side, top, bottom) shades of every box."""
         nb = len(world.bmin)
         if getattr(self, "_pal_n", -1) != nb:
             rgb = world.box_color.astype(np.float32)
             shades = np.stack([rgb * 0.85, rgb * 1.0, rgb * 0.6], axis=1).reshape(-1, 3)  # side, top, bottom
-            pal = np.concatenate([np.array([SKY_BGR, GROUND_BGR], np.float32), shades[:, ::-1],
-                                  np.array([BLANKET_BGR, SILK_BGR, DECOY_BGR, HOLE_BGR], np.float32)])
+            pal = np.concatenate([np.array([SKY_BGR, GROUND_BGR], np.float32), shades[:, ::-1]])
             self._pal = pal.clip(0, 255).astype(np.uint8)
             self._pal_n = nb
         return self._pal
 
 
-def _paint_box(g: "_Grid", depth, label, zin, zout, z0, z1, cz, b) -> None:
-    """Paint box b into the columns its footprint covers; nearest depth wins."""
-    cols = np.nonzero(np.isfinite(zin) & (zout > 1e-3))[0]
-    if len(cols) == 0:
-        return
-    u0, u1 = cols[0], cols[-1] + 1
+def _paint_box(g: "_Grid", depth, label, zin, zout, z0, z1, cz, b, u0, u1, v0, v1) -> None:
+    """Paint box b into its image rectangle [v0, v1) x [u0, u1) of columns whose rays meet its footprint.
+
+    zin is the entry z-depth per column (inf where missed; clamped to a small positive value when the
+    camera is inside the footprint, e.g. under a slab, so the box is entered through its top or bottom).
+    """
     zi, zo = zin[u0:u1], zout[u0:u1]
     valid = np.isfinite(zi)
-    # a camera within the box's footprint (under a slab) enters it through its top or bottom only
-    zi, zo = np.where(valid, np.maximum(zi, 1e-3), 1.0), np.where(valid, zo, 1.0)
-    # rows the box can cover in these columns
-    vs = np.concatenate([g.cy - g.fy * (z1 - cz) / zi, g.cy - g.fy * (z0 - cz) / zi,
-                         g.cy - g.fy * (z1 - cz) / zo, g.cy - g.fy * (z0 - cz) / zo])
-    v0 = int(max(0, math.floor(vs.min())))
-    v1 = int(min(g.h, math.ceil(vs.max()) + 1))
-    if v0 >= v1:
-        return
+    zi, zo = np.where(valid, zi, 1.0), np.where(valid, zo, 1.0)
     blk_d = depth[v0:v1, u0:u1]
     if blk_d.max() <= zi[valid].min():                 # everything here is already nearer: occluded
         return
@@ -215,6 +229,21 @@ def _paint_box(g: "_Grid", depth, label, zin, zout, z0, z1, cz, b) -> None:
     closer = z < blk_d
     blk_d[closer] = z[closer]
     label[v0:v1, u0:u1][closer] = 2 + 3 * b + face[closer]
+
+
+def _to_mm(z: np.ndarray) -> np.ndarray:
+    """z-depth in metres -> uint16 millimetres, 0 outside the sensor's 0.2-10 m range."""
+    z = np.asarray(z, dtype=np.float32)
+    ok = (z >= C.CAM_DEPTH_MIN) & (z <= C.CAM_DEPTH_MAX)
+    return np.where(ok, z * 1000.0, 0.0).astype(np.uint16)
+
+
+def _upsample(img: np.ndarray, k: int) -> np.ndarray:
+    """Nearest-neighbour k x k upsampling in a single copy (broadcast, then reshape)."""
+    h, w = img.shape[:2]
+    rest = img.shape[2:]
+    big = np.broadcast_to(img.reshape(h, 1, w, 1, *rest), (h, k, w, k, *rest))
+    return big.reshape(h * k, w * k, *rest)
 
 
 class _Grid:

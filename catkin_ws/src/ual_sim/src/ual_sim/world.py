@@ -261,29 +261,47 @@ def split_wall(bmin: np.ndarray, bmax: np.ndarray, openings: list, where: str) -
         return [(bmin.copy(), bmax.copy())]
     sb = sorted({bmin[axis], bmax[axis], *[o[0] for o in ops], *[o[1] for o in ops]})
     zb = sorted({bmin[2], bmax[2], *[o[2] for o in ops], *[o[3] for o in ops]})
-    columns = []
-    for s0, s1 in zip(sb[:-1], sb[1:]):
-        runs, start = [], None
-        for z0, z1 in zip(zb[:-1], zb[1:]):
-            sm, zm = 0.5 * (s0 + s1), 0.5 * (z0 + z1)
-            solid = not any(o[0] < sm < o[1] and o[2] < zm < o[3] for o in ops)
-            if solid and start is None:
-                start = z0
-            if not solid and start is not None:
-                runs.append((start, z0))
-                start = None
-        if start is not None:
-            runs.append((start, zb[-1]))
-        if columns and columns[-1][2] == runs and abs(columns[-1][1] - s0) < 1e-9:
-            columns[-1][1] = s1
-        else:
-            columns.append([s0, s1, runs])
+
+    def solid(s0, s1, z0, z1) -> bool:
+        sm, zm = 0.5 * (s0 + s1), 0.5 * (z0 + z1)
+        return not any(o[0] < sm < o[1] and o[2] < zm < o[3] for o in ops)
+
+    def strips(outer, inner, cell):
+        """Runs of solid cells along `inner` for every interval of `outer`, equal neighbours merged."""
+        out = []
+        for a0, a1 in zip(outer[:-1], outer[1:]):
+            runs, start = [], None
+            for b0, b1 in zip(inner[:-1], inner[1:]):
+                ok = cell(a0, a1, b0, b1)
+                if ok and start is None:
+                    start = b0
+                if not ok and start is not None:
+                    runs.append((start, b0))
+                    start = None
+            if start is not None:
+                runs.append((start, inner[-1]))
+            if out and out[-1][2] == runs and abs(out[-1][1] - a0) < 1e-9:
+                out[-1][1] = a1
+            else:
+                out.append([a0, a1, runs])
+        return out
+
+    # vertical strips (columns along the wall) or horizontal bands, whichever gives fewer boxes
+    cols = strips(sb, zb, lambda s0, s1, z0, z1: solid(s0, s1, z0, z1))
+    bands = strips(zb, sb, lambda z0, z1, s0, s1: solid(s0, s1, z0, z1))
     out = []
-    for s0, s1, runs in columns:
-        for z0, z1 in runs:
-            lo, hi = bmin.copy(), bmax.copy()
-            lo[axis], hi[axis], lo[2], hi[2] = s0, s1, z0, z1
-            out.append((lo, hi))
+    if sum(len(c[2]) for c in cols) <= sum(len(b[2]) for b in bands):
+        for s0, s1, runs in cols:
+            for z0, z1 in runs:
+                lo, hi = bmin.copy(), bmax.copy()
+                lo[axis], hi[axis], lo[2], hi[2] = s0, s1, z0, z1
+                out.append((lo, hi))
+    else:
+        for z0, z1, runs in bands:
+            for s0, s1 in runs:
+                lo, hi = bmin.copy(), bmax.copy()
+                lo[axis], hi[axis], lo[2], hi[2] = s0, s1, z0, z1
+                out.append((lo, hi))
     return out
 
 

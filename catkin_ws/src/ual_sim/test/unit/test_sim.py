@@ -249,3 +249,31 @@ def test_wind_pushes_near_first_floor():
         s.step(DT)
         errs.append(np.linalg.norm(r.pos[:2] - [8.0, 13.0]))
     assert max(errs) > 0.005 and max(errs) < 1.0 and not r.crashed
+
+
+def test_sensor_cache_follows_motion_and_fire_state(sim):
+    r = sim.robots[2]
+    f = sim.fires.by_id("C_1")
+    f.active = True
+    hover_facing(sim, r, f, 2.0)
+    a = sim.thermal_frame(r, 1)
+    b = sim.thermal_frame(r, 1)
+    assert a.max() > 100 and not np.array_equal(a, b)      # fresh noise on a cached clean frame
+    sim.start_pump(2)
+    run_until(sim, lambda: f.extinguished, 20.0)
+    assert sim.thermal_frame(r, 1).max() < 50              # the cache saw the fire go out
+    s1 = sim.laser(r)
+    r.go_to(r.pos[0] - 1.0, r.pos[1], r.pos[2], r.yaw)
+    run_until(sim, r.goal_reached)
+    assert sim.laser(r)[C.LASER_BEAMS // 2] == pytest.approx(s1[C.LASER_BEAMS // 2] + 1.0, abs=1e-6)
+
+
+def test_markers_cover_world_robots_fires():
+    import rospy
+    from ual_sim.markers import build_markers
+    s = Simulation(load_world(), seed=1)
+    ma = build_markers(s, rospy.Time(0))
+    ns = {m.ns for m in ma.markers}
+    assert {"building", "fires", "robots", "jets"} <= ns
+    assert sum(m.ns == "building" for m in ma.markers) == len(s.world.bmin)
+    assert sum(m.ns == "fires" for m in ma.markers) == len(s.fires.fires)

@@ -1,0 +1,1 @@
+"""smach_viewer: a live web viewer for SMACH introspection servers."""
