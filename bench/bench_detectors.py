@@ -102,7 +102,7 @@ def fire_benchmark() -> dict:
     # ablations, FORWARD 1-4 m: what the frame filter and the peak gate are for
     abl = {}
     for label, cfg in (("as_shipped", {}), ("no_frame_filter", {"num_frame_filter": 0}),
-                       ("no_peak_gate_original", {"min_peak_temperature": 0.0}),
+                       ("threshold_37_only_original", {"min_fire_temperature": 0.0}),
                        ("no_false_negative_tolerance", {"false_negative_tolerance": 0})):
         r = fire_band(FC.CAMERA_DIRECTION_FORWARD, (1.0, 4.0), FIRE_TRIALS, 999, **cfg)
         abl[label] = {k: r[k] for k in ("precision", "recall", "tp", "fp", "fn")}

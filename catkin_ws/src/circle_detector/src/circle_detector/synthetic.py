@@ -1,7 +1,7 @@
 """A small synthetic RGB-D renderer of a facade fire holder for tests, benchmarks and the publisher.
 
 The facade is a textured plane seen by the RealSense colour camera (640x480, fx = fy = 462.1) from a
-given distance and angle; on it, a row of three dark discs: the real hole in the middle (the depth looks
+given distance and angle; on it, a row of three dark discs (0.15 m radius, 0.7 m apart, as in the C3 world): the real hole in the middle (the depth looks
 through it to the container behind) and a painted decoy on each side (flat). Colour gets shading and
 noise, depth gets distance-dependent noise, dropouts and millimetre quantisation; beyond the facade is
 sky (no depth).
@@ -65,9 +65,9 @@ def random_scene(rng: np.random.Generator, distance: float, max_angle_deg: float
                  K: Intrinsics = DEFAULT_K) -> FacadeScene:
     """The holder at `distance` m (to the hole), facade turned up to `max_angle_deg`, all three in view."""
     yaw = math.radians(rng.uniform(-max_angle_deg, max_angle_deg))
-    pitch = math.radians(rng.uniform(-8.0, 8.0))
-    radius = rng.uniform(0.1, 0.15)
-    spacing = rng.uniform(0.5, 0.6)
+    pitch = math.radians(rng.uniform(-5.0, 5.0))
+    radius = rng.uniform(0.12, 0.18)   # C3 world / ual_sim: 0.15 m hole and decoys, 0.7 m apart
+    spacing = rng.uniform(0.6, 0.8)
     for _ in range(100):  # keep the three circles inside the image
         bx, by = rng.uniform(-0.25, 0.25) * distance, rng.uniform(-0.25, 0.25) * distance
         z = math.sqrt(max(distance ** 2 - bx ** 2 - by ** 2, 0.25))
@@ -127,7 +127,7 @@ def render(scene: FacadeScene, rng: np.random.Generator, K: Intrinsics = DEFAULT
 # Named scenes for the synthetic publisher, the rostests and the recordings.
 NAMED_SCENES = {
     # holder 3 m ahead, slightly left and below, facade turned 20 degrees
-    "facade_holder": FacadeScene((-0.2, 0.1, 3.0), math.radians(20.0), math.radians(-3.0), 0.12, 0.55, 170.0, 40.0),
+    "facade_holder": FacadeScene((-0.2, 0.1, 3.0), math.radians(20.0), math.radians(-3.0), 0.15, 0.7, 170.0, 40.0),
     # the same facade with no holder: nothing round to find
-    "plain_wall": FacadeScene((-0.2, 0.1, 3.0), math.radians(20.0), math.radians(-3.0), 0.0, 0.55, 170.0, 40.0),
+    "plain_wall": FacadeScene((-0.2, 0.1, 3.0), math.radians(20.0), math.radians(-3.0), 0.0, 0.7, 170.0, 40.0),
 }

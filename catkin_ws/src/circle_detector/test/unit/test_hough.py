@@ -36,7 +36,7 @@ def test_plain_wall_has_no_circle():
 
 @pytest.mark.parametrize("yaw_deg", [-40, 40])
 def test_oblique_facade_needs_rectification(yaw_deg):
-    scene = S.FacadeScene((0.0, 0.0, 3.5), math.radians(yaw_deg), 0.0, 0.11, 0.55, 170.0, 40.0)
+    scene = S.FacadeScene((0.0, 0.0, 3.5), math.radians(yaw_deg), 0.0, 0.15, 0.7, 170.0, 40.0)
     circles = detect(scene)
     i = choose_middle_hole([(c.x, c.y, c.z, c.radius_m) for c in circles])
     assert i is not None

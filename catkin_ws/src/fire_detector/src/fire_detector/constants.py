@@ -33,10 +33,11 @@ DEFAULT_ANGLE_AMPLITUDE_DEG = 5.0
 DEFAULT_NUM_FRAME_FILTER = 15
 # Extensions of this port (0 / 0.0 give the original behaviour), see README.md:
 # consecutive cold frames forgiven once a fire is confirmed (a dropped or occluded frame must not reset
-# the 15-frame filter), and the hottest pixel a fire must reach (a sun-heated wall at 40-45 degC passes
-# the 37 degC threshold in every frame, so no frame count can reject it; a fire is much hotter).
+# the 15-frame filter), and the temperature a pixel must reach to count as fire (a sun-heated facade at
+# 40-45 degC passes the 37 degC threshold in every frame, so no frame count can reject it, and it merges
+# with the fire into one contour; flames, heaters and plates read well above 50 degC up to 8 m).
 DEFAULT_FALSE_NEGATIVE_TOLERANCE = 3
-DEFAULT_MIN_PEAK_TEMPERATURE = 50.0
+DEFAULT_MIN_FIRE_TEMPERATURE = 50.0
 
 # Ground height (arena frame) at which DOWNWARD fires are placed.
 GROUND_Z = 0.0

@@ -24,7 +24,7 @@ class DetectorConfig:
     angle_amplitude: float = C.DEFAULT_ANGLE_AMPLITUDE_DEG
     num_frame_filter: int = C.DEFAULT_NUM_FRAME_FILTER
     false_negative_tolerance: int = C.DEFAULT_FALSE_NEGATIVE_TOLERANCE
-    min_peak_temperature: float = C.DEFAULT_MIN_PEAK_TEMPERATURE
+    min_fire_temperature: float = C.DEFAULT_MIN_FIRE_TEMPERATURE
 
     def __post_init__(self) -> None:
         if self.camera_config not in C.CAMERA_CONFIGS:
@@ -90,7 +90,7 @@ class FireDetector:
     ) -> FrameResult:
         """Processes one raw_temp_array frame; raises ValueError on malformed temperatures."""
         frame = parse_temperatures(temperatures)
-        spot = find_hot_spot(frame, self.config.thermal_threshold, self.config.min_peak_temperature)
+        spot = find_hot_spot(frame, self.config.thermal_threshold, self.config.min_fire_temperature)
         confirmed_now = self.filter.update(spot is not None)
         result = FrameResult(spot=spot, confirmed=self.filter.confirmed)
         if spot is None:

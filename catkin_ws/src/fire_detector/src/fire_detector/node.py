@@ -46,7 +46,7 @@ class FireDetectorNode:
             angle_amplitude=float(rospy.get_param("~angle_amplitude", C.DEFAULT_ANGLE_AMPLITUDE_DEG)),
             num_frame_filter=int(rospy.get_param("~num_frame_filter", C.DEFAULT_NUM_FRAME_FILTER)),
             false_negative_tolerance=int(rospy.get_param("~false_negative_tolerance", C.DEFAULT_FALSE_NEGATIVE_TOLERANCE)),
-            min_peak_temperature=float(rospy.get_param("~min_peak_temperature", C.DEFAULT_MIN_PEAK_TEMPERATURE)),
+            min_fire_temperature=float(rospy.get_param("~min_fire_temperature", C.DEFAULT_MIN_FIRE_TEMPERATURE)),
         )
         self.detector = FireDetector(config)
         self.lock = threading.Lock()

@@ -20,6 +20,13 @@ SUPERSAMPLE = 3
 LASER_BEAMS = 720
 LASER_RANGE_MAX = 25.0
 LASER_RANGE_MIN = 0.15
+AMBIENT = 30.0
+ATTEN_DIST = 6.0
+# The C3 world's heat sources (c3_world.md; same figures as ual_sim's model): facade holder = ring of
+# flames (0.4 m, 250 degC) around the hole with a heater (0.15 m, 120 degC), both cooling as the fire is
+# filled with water; ground fire = plate of 0.5 m at 120 degC (45 under a blanket); inactive holder 28;
+# sun-heated facades and roofs 40-45; interior walls 31; ground 34.
+RING_RADIUS, HOLE_RADIUS, PLATE_RADIUS = 0.4, 0.15, 0.5
 
 
 @dataclass(frozen=True)
@@ -33,7 +40,9 @@ class ThermalScene:
         source_offset: (lateral, vertical) position of the source on the surface, metres from the point the
             camera axis hits (lateral: to the UAV's left; vertical: up, or forward for DOWNWARD).
         source_radius: radius of the heat source (m); 0 for none.
-        source_temp, surface_temp: degrees C.
+        source_temp, surface_temp: degrees C (true temperatures; the camera sees their contrast to the
+            30 degC ambient fade with distance as 1 / (1 + (d / 6 m)^2), as in ual_sim).
+        inner_radius, inner_temp: a hotter or colder disc in the middle (the heater in the hole).
         uav_xyz, uav_yaw: pose of the UAV in the arena frame.
         kind: one of SCENE_KINDS (what the benchmark counts as truth: only "fire" is a fire).
     """
@@ -48,6 +57,8 @@ class ThermalScene:
     uav_xyz: Tuple[float, float, float]
     uav_yaw: float
     kind: str = "fire"
+    inner_radius: float = 0.0
+    inner_temp: float = 0.0
 
     def _axes(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Surface point on the camera axis, its normal (away from the UAV) and in-plane axes (body frame)."""
@@ -123,11 +134,12 @@ def render_frame(scene: ThermalScene, rng: np.random.Generator, noise_std: float
     temp = temp + 1.5 * np.tanh(0.1 * (hit @ e_vert))
     if scene.source_radius > 0:
         r2 = d_lat ** 2 + d_vert ** 2
-        inside = np.isfinite(t) & (r2 <= scene.source_radius ** 2)
-        # hotter in the middle (heater), cooler at the rim (flame ring)
-        prof = scene.source_temp - 0.3 * (scene.source_temp - scene.surface_temp) * r2 / scene.source_radius ** 2
-        temp = np.where(inside, prof, temp)
-    temp = np.where(np.isfinite(t), temp, 15.0)  # sky
+        temp = np.where(np.isfinite(t) & (r2 <= scene.source_radius ** 2), scene.source_temp, temp)
+        if scene.inner_radius > 0:
+            temp = np.where(np.isfinite(t) & (r2 <= scene.inner_radius ** 2), scene.inner_temp, temp)
+    dist = np.where(np.isfinite(t), t * np.linalg.norm(rays, axis=-1), 0.0)
+    temp = AMBIENT + (temp - AMBIENT) / (1.0 + (dist / ATTEN_DIST) ** 2)
+    temp = np.where(np.isfinite(t), temp, 20.0)  # sky
     s = SUPERSAMPLE
     frame = temp.reshape(C.IMG_HEIGHT, s, C.IMG_WIDTH, s).mean(axis=(1, 3))
     frame = frame + rng.normal(0.0, noise_std, frame.shape)
@@ -166,34 +178,39 @@ def random_scene(rng: np.random.Generator, direction: int, distance: float, kind
                  max_angle_deg: float = 40.0) -> ThermalScene:
     """A random viewpoint at `distance` metres of one of SCENE_KINDS.
 
-    Fires (facade: ring of flames 0.2-0.3 m radius, 80-250 degC; ground: heated plate 0.3-0.5 m,
-    60-120 degC under silk) are placed within 12 degrees of the camera axis, so that they are in view.
+    fire: an active holder (FORWARD, partly cooled by water: 30-100 % of its heat) on a sun-heated or
+    interior wall, or a ground plate (DOWNWARD); empty: a cool surface; inactive_holder: a cold holder on
+    a sun-heated wall (FORWARD) or a plate under a blanket (DOWNWARD); hot_wall: a sun-heated facade or
+    roof with nothing on it. Sources are placed within 12 degrees of the camera axis.
     """
     if kind not in SCENE_KINDS:
         raise ValueError(f"unknown scene kind {kind!r}")
-    angle = math.radians(rng.uniform(-max_angle_deg, max_angle_deg))
-    if direction == C.CAMERA_DIRECTION_DOWNWARD:
-        angle = math.radians(rng.uniform(-5.0, 5.0))  # the ground is flat; the UAV tilts a little
+    forward = direction == C.CAMERA_DIRECTION_FORWARD
+    angle = math.radians(rng.uniform(-max_angle_deg, max_angle_deg) if forward else rng.uniform(-5.0, 5.0))
     bearing = math.radians(12.0)
     off = (rng.uniform(-1, 1) * distance * math.tan(bearing), rng.uniform(-1, 1) * distance * math.tan(bearing))
-    ambient = rng.uniform(20.0, 34.0)
-    if direction == C.CAMERA_DIRECTION_FORWARD:
-        radius, hot = rng.uniform(0.2, 0.3), rng.uniform(80.0, 250.0)
-    else:
-        radius, hot = rng.uniform(0.3, 0.5), rng.uniform(60.0, 120.0)
-    surface = ambient
-    if kind == "empty":
-        radius = 0.0
+    sun = rng.uniform(40.0, 45.0)
+    surface = (sun if rng.random() < 0.7 else 31.0) if forward else 34.0
+    radius, hot, inner_r, inner_t = 0.0, 0.0, 0.0, 0.0
+    if kind == "fire":
+        if forward:
+            heat = rng.uniform(0.3, 1.0)
+            radius, hot = RING_RADIUS, surface + (250.0 - surface) * heat
+            inner_r, inner_t = HOLE_RADIUS, surface + (120.0 - surface) * heat
+        else:
+            radius, hot = PLATE_RADIUS, 120.0
+    elif kind == "empty":
+        surface = 31.0 if forward else 34.0
     elif kind == "inactive_holder":
-        hot = ambient + rng.uniform(0.5, 3.0)
+        radius, hot = (RING_RADIUS, 28.0) if forward else (PLATE_RADIUS, 45.0)
+        surface = sun if forward else 34.0
     elif kind == "hot_wall":
-        surface = rng.uniform(40.0, 45.0)
-        radius = 0.0
+        surface = sun
     uav = (rng.uniform(-5, 30), rng.uniform(-5, 30), rng.uniform(1.0, 15.0))
-    if direction == C.CAMERA_DIRECTION_DOWNWARD:
+    if not forward:
         uav = (uav[0], uav[1], distance)
     return ThermalScene(direction, distance, angle, off, radius, hot, surface, uav,
-                        rng.uniform(-math.pi, math.pi), kind)
+                        rng.uniform(-math.pi, math.pi), kind, inner_r, inner_t)
 
 
 def jitter(scene: ThermalScene, rng: np.random.Generator, pos_std: float = 0.03,
@@ -224,17 +241,17 @@ def scene_truth(scene: ThermalScene) -> Optional[Tuple[float, float, float]]:
 # recordings: the UAV hovers in front of / above a known fire holder.
 NAMED_SCENES = {
     # facade A (y = 19.5), holder (17.4, 19.5, 10.5), active; UAV 3 m in front, facing +y
-    "facade_fire": ThermalScene(C.CAMERA_DIRECTION_FORWARD, 3.0, math.radians(10.0), (0.0, 0.0), 0.25, 150.0,
-                                30.0, (17.4, 16.5, 10.5), math.pi / 2, "fire"),
+    "facade_fire": ThermalScene(C.CAMERA_DIRECTION_FORWARD, 3.0, math.radians(10.0), (0.0, 0.0), RING_RADIUS,
+                                250.0, 42.0, (17.4, 16.5, 10.5), math.pi / 2, "fire", HOLE_RADIUS, 120.0),
     # facade A, holder (12.4, 19.5, 6.5), inactive (cold); UAV 2.5 m in front
-    "inactive_holder": ThermalScene(C.CAMERA_DIRECTION_FORWARD, 2.5, 0.0, (0.0, 0.0), 0.25, 32.0,
-                                    30.0, (12.4, 17.0, 6.5), math.pi / 2, "inactive_holder"),
+    "inactive_holder": ThermalScene(C.CAMERA_DIRECTION_FORWARD, 2.5, 0.0, (0.0, 0.0), RING_RADIUS, 28.0,
+                                    42.0, (12.4, 17.0, 6.5), math.pi / 2, "inactive_holder"),
     # facade D (x = 24.2) heated by the sun to 43 degC, no fire; UAV 3 m away facing +x
     "hot_wall": ThermalScene(C.CAMERA_DIRECTION_FORWARD, 3.0, math.radians(-15.0), (0.0, 0.0), 0.0, 0.0,
                              43.0, (21.2, 12.7, 10.5), 0.0, "hot_wall"),
     # outdoor holder (1, 14, 0) seen from 4 m above, slightly off-centre
-    "ground_fire": ThermalScene(C.CAMERA_DIRECTION_DOWNWARD, 4.0, 0.0, (0.3, 0.2), 0.4, 110.0,
-                                35.0, (1.2, 13.7, 4.0), math.radians(30.0), "fire"),
+    "ground_fire": ThermalScene(C.CAMERA_DIRECTION_DOWNWARD, 4.0, 0.0, (0.3, 0.2), PLATE_RADIUS, 120.0,
+                                34.0, (1.2, 13.7, 4.0), math.radians(30.0), "fire"),
 }
 
 

@@ -46,22 +46,22 @@ def parse_temperatures(data: Sequence[float]) -> np.ndarray:
     return arr.reshape(C.IMG_HEIGHT, C.IMG_WIDTH)
 
 
-def find_hot_spot(frame: np.ndarray, threshold: float, min_peak: float = 0.0) -> Optional[HotSpot]:
+def find_hot_spot(frame: np.ndarray, threshold: float, min_fire_temperature: float = 0.0) -> Optional[HotSpot]:
     """Returns the hot spot of a 32x32 frame, or None when nothing is hot enough.
 
-    A frame is hot when some pixels reach `threshold` and the hottest reaches `min_peak` (0 disables that
-    gate). The position is the plain mean of the centroids of every contour, as in the original; unlike
-    the original, which kept centroids in fixed-size arrays that overflowed with many contours, any
-    number of contours is handled.
+    Hot pixels are those at or above max(`threshold`, `min_fire_temperature`): the original's 37 degC
+    threshold alone makes a whole sun-heated facade (40-45 degC) one hot contour, so the frame is always
+    "hot" and the centroid is the middle of the wall, not the fire; `min_fire_temperature` = 0 gives the
+    original behaviour. The position is the plain mean of the centroids of every contour, as in the
+    original; unlike the original, which kept centroids in fixed-size arrays that overflowed with many
+    contours, any number of contours is handled.
     """
     valid = np.nan_to_num(frame, nan=-np.inf)
-    mask = (valid >= threshold).astype(np.uint8)
+    mask = (valid >= max(threshold, min_fire_temperature)).astype(np.uint8)
     hot_pixels = int(mask.sum())
     if hot_pixels == 0:
         return None
     peak = float(valid.max())
-    if peak < min_peak:
-        return None
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     centroids = []
     for contour in contours:

@@ -52,7 +52,7 @@ def test_no_fire_scenes(name):
 
 def test_hot_wall_fools_the_original_threshold_alone():
     """Without the peak gate (original behaviour) the sun-heated wall is a persistent false positive."""
-    det, fires = run("hot_wall", n=40, min_peak_temperature=0.0)
+    det, fires = run("hot_wall", n=40, min_fire_temperature=0.0)
     assert fires
 
 

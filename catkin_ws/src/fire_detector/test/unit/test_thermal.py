@@ -44,12 +44,15 @@ def test_many_contours_do_not_overflow():
     assert s.u == pytest.approx(15.0, abs=0.01) and s.v == pytest.approx(15.0, abs=0.01)
 
 
-def test_min_peak_rejects_lukewarm_wall_but_not_fire():
+def test_min_fire_temperature_rejects_sun_heated_wall_and_finds_the_fire_in_it():
     wall = cold(43.0)
-    assert find_hot_spot(wall, 37.0, min_peak=0.0) is not None  # original behaviour: hot
-    assert find_hot_spot(wall, 37.0, min_peak=50.0) is None
-    wall[5, 5] = 120.0
-    assert find_hot_spot(wall, 37.0, min_peak=50.0) is not None
+    assert find_hot_spot(wall, 37.0, 0.0) is not None  # original behaviour: the whole wall is hot
+    assert find_hot_spot(wall, 37.0, 50.0) is None
+    wall[4:7, 24:27] = 200.0
+    s = find_hot_spot(wall, 37.0, 50.0)
+    assert (s.u, s.v, s.hot_pixels) == (25.0, 5.0, 9)
+    s0 = find_hot_spot(wall, 37.0, 0.0)  # original: one contour, the whole frame, centroid in the middle
+    assert s0.num_contours == 1 and abs(s0.u - 15.5) < 0.5
 
 
 def test_parse_rejects_wrong_length_and_all_nan():

@@ -6,8 +6,9 @@ with each associated detection by an information-filter update.
 
 Association: a detection goes to the track of its type with the smallest Mahalanobis distance
 (innovation covariance = track + detection covariance) under the chi-square gate `chi2_gate` (99.9 % for
-3 dof) and within the Euclidean cap `gate` (m) of the type; two tracks that come within each other's gate
-are merged (the older id survives). Why both: with only a Euclidean gate, noise tails start duplicate
+3 dof) and within the Euclidean cap `gate` (m) of the type; two tracks of a type that come within that
+gate of each other (with a detection's default covariance added, so that two overconfident tracks still
+meet), or closer than `merge_distance` of the type, are merged (the older id survives). Why both: with only a Euclidean gate, noise tails start duplicate
 tracks that then grow on their own (bench_agents: 25 duplicates of 8 fires at 0.7 m noise).
 
 Track life:
@@ -89,6 +90,8 @@ class ObjectEstimator:
     Args:
         gates: Euclidean cap (m) of the association per object type; other types use `default_gate`.
         chi2_gate: Mahalanobis gate (squared, 3 dof; 16.27 = 99.9 %).
+        merge_distances: per type, tracks closer than this are one object (fire holders are >= 2.9 m apart),
+            whatever their covariances say (a static model grows overconfident).
         min_updates: updates before a track is confirmed (ACTIVE).
         lost_time: s without an update before a track is LOST (or dropped while tentative).
         default_covariance: variances (m^2) x, y, z used when a detection carries no valid covariance
@@ -99,7 +102,9 @@ class ObjectEstimator:
     def __init__(self, gates: Optional[Dict[int, float]] = None, default_gate: float = 2.0,
                  min_updates: int = 5, lost_time: float = 10.0,
                  default_covariance: Sequence[float] = (1.5, 1.5, 0.5), process_noise: float = 1e-3,
-                 buildings: Sequence[Sequence[float]] = tuple(C.BUILDINGS), chi2_gate: float = 16.27) -> None:
+                 buildings: Sequence[Sequence[float]] = tuple(C.BUILDINGS), chi2_gate: float = 16.27,
+                 merge_distances: Optional[Dict[int, float]] = None) -> None:
+        self.merge_distances = dict(merge_distances or {C.TYPE_FIRE: 1.5, C.TYPE_HOLE: 0.15})
         self.gates = dict(gates or {C.TYPE_FIRE: 5.0, C.TYPE_HOLE: 0.4})
         self.chi2_gate = float(chi2_gate)
         self.default_gate = default_gate
@@ -166,7 +171,13 @@ class ObjectEstimator:
 
     def _merge_near(self, track: Track) -> Track:
         """Merge track into another track of its type inside the gates (the older one survives)."""
-        other = self._gated(track.type, track.position, track.covariance, exclude=track.id)
+        # the gate as if the other track were a fresh detection: a confident track must not keep a twin
+        other = self._gated(track.type, track.position, track.covariance + self.default_cov, exclude=track.id)
+        if other is None:
+            md = self.merge_distances.get(track.type, 0.0)
+            near = [t for t in self.tracks.values() if t.type == track.type and t.id != track.id
+                    and float(np.linalg.norm(t.position - track.position)) < md]
+            other = min(near, key=lambda t: float(np.linalg.norm(t.position - track.position)), default=None)
         if other is None:
             return track
         keep, gone = (other, track) if other.id < track.id else (track, other)

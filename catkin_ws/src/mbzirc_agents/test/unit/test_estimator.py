@@ -83,3 +83,24 @@ def test_classify_fire():
     assert classify_fire((12.4, 19.5, 6.5), C.BUILDINGS) == C.SUBTYPE_FACADE
     assert classify_fire((23.7, 19.5, 0.75), C.BUILDINGS) == C.SUBTYPE_FACADE
     assert classify_fire((16, 12, 1.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
+
+
+def test_noise_tails_do_not_start_duplicate_tracks():
+    """At 1 m noise a Euclidean-only gate left duplicates (bench_agents); Mahalanobis + merge does not."""
+    est = ObjectEstimator(min_updates=5)
+    rng = np.random.default_rng(4)
+    truth = np.array([17.4, 19.5, 10.5])
+    cov = np.diag([1.0, 1.0, 0.25])
+    for k in range(400):
+        est.add(det(truth + rng.normal(0, [1.0, 1.0, 0.5]), t=k * 0.05, agent=str(k % 3), cov=cov))
+    assert len(est.objects()) == 1
+    assert np.linalg.norm(est.objects()[0].position - truth) < 0.3
+
+
+def test_fires_on_two_floors_stay_apart():
+    est = ObjectEstimator(min_updates=1)
+    rng = np.random.default_rng(5)
+    for k in range(100):
+        est.add(det(np.array([11.4, 8.5, 6.0]) + rng.normal(0, 0.3, 3), t=k * 0.1))
+        est.add(det(np.array([11.4, 8.5, 12.5]) + rng.normal(0, 0.3, 3), t=k * 0.1))
+    assert len(est.objects()) == 2

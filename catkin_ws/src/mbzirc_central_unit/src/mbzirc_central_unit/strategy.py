@@ -83,6 +83,7 @@ class Strategy:
         self.finished: set[str] = set()  # agents sent home for good
         # Fire ids a search just reported, not yet in /estimated_objects: the agent waits a few ticks.
         self.pending_ids: dict[str, tuple[set[int], int]] = {}
+        self.consecutive_failures: Counter[str] = Counter()
 
     # ---- bookkeeping -----------------------------------------------------------------------------
     def altitude(self, agent_id: str) -> float:
@@ -112,6 +113,7 @@ class Strategy:
         result = result or {}
         self.in_flight.pop(cmd.agent_id, None)
         if succeeded:
+            self.consecutive_failures[cmd.agent_id] = 0
             self.last_done[cmd.agent_id] = cmd
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
@@ -125,6 +127,9 @@ class Strategy:
         self.last_done.pop(cmd.agent_id, None)
         key = (cmd.agent_id, cmd.task, cmd.target)
         self.failures[key] += 1
+        self.consecutive_failures[cmd.agent_id] += 1
+        if self.broken(cmd.agent_id):
+            self.release(cmd.agent_id)  # e.g. crashed: whatever it owned goes to the others
         if self.failures[key] >= self.p.max_failures:
             # Give that work up for this agent: free its floor so that another agent takes it.
             if cmd.task in C.FACADE_TASKS and self.floor_owner.get(self._floor_of_target(cmd)) == cmd.agent_id:
@@ -138,6 +143,12 @@ class Strategy:
                 self.indoor_searches[cmd.target] += 1
             if cmd.task == C.LOOK_FOR_GROUND_FIRES:
                 self.ground_searches += 1
+
+    def broken(self, agent_id: str) -> bool:
+        """An agent that cannot take off any more, or failed every task of a long row (a crashed robot
+        still publishes its data_feed): it gets no more work, and owns nothing."""
+        return (self.failures[(agent_id, C.TAKE_OFF, None)] >= self.p.max_failures
+                or self.consecutive_failures[agent_id] >= 2 * self.p.max_failures)
 
     def forget(self, cmd: Command) -> None:
         """A command that could not be sent (no action server yet): not in flight, not a failure."""
@@ -162,7 +173,7 @@ class Strategy:
     # ---- ownership -------------------------------------------------------------------------------
     def _owner_alive(self, owner: Optional[str], world: WorldView) -> bool:
         a = world.agents.get(owner) if owner is not None else None
-        return a is not None and a.alive(world.now, self.p.agent_timeout)
+        return a is not None and a.alive(world.now, self.p.agent_timeout) and not self.broken(owner)
 
     def _free_for(self, d: dict[int, str], floor: int, agent_id: str, world: WorldView) -> bool:
         """True if no other alive UAV works at that floor, outside or inside: one UAV per floor altitude
@@ -201,7 +212,7 @@ class Strategy:
             a = world.agents[agent_id]
             if not a.alive(world.now, self.p.agent_timeout) or agent_id in self.in_flight or not a.is_idle:
                 continue
-            if self._waiting_for_reported_fires(agent_id, world):
+            if self._waiting_for_reported_fires(agent_id, world) or self.broken(agent_id):
                 continue
             if not a.is_uav:
                 cmd = self._decide_ugv(a, world)
@@ -485,7 +496,12 @@ class Strategy:
         room = min(rooms, key=lambda r: math.dist(r.inner, a.position))
         e = room.entry
         back = e[3] + math.pi  # face out while leaving
-        return [(*room.inner, back), (e[0], e[1], e[2], back)]
+        # One waypoint per goal: the agents' search_indoor stops at the first waypoint where it knows a
+        # fire of the floor, so a longer path could end inside. First to the point inside the window,
+        # then straight out through it.
+        if math.dist(a.position, room.inner) > 0.6:
+            return [(*room.inner, back)]
+        return [(e[0], e[1], e[2], back)]
 
     def _go_home(self, a: AgentView, reason: str) -> Command:
         """Leave the building (through the window, then the nearest free elevator down or up to the UAV's

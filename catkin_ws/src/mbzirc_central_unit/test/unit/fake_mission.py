@@ -88,9 +88,14 @@ class FakeMission:
         t = cmd.task
         if t == C.TAKE_OFF:
             a.z, a.ual_state = g["height"], C.UAL_FLYING_AUTO
-        elif t in (C.FOLLOW_PATH, C.SEARCH_FACADE, C.LOOK_FOR_GROUND_FIRES, C.SEARCH_INDOOR) and g.get("path") \
-                and a.is_uav:
+        elif t in (C.FOLLOW_PATH, C.SEARCH_FACADE, C.LOOK_FOR_GROUND_FIRES) and g.get("path") and a.is_uav:
             a.x, a.y, a.z = g["path"][-1][:3]
+        elif t == C.SEARCH_INDOOR and g.get("path") and a.is_uav:
+            # Like the agents (~stop_at_first_fire): stop at the first waypoint once a fire of the floor
+            # is known.
+            known = any(f.kind == C.KIND_INDOOR and f.floor == g["floor"] and not f.extinguished
+                        for f in self.fires.values())
+            a.x, a.y, a.z = g["path"][0 if known else -1][:3]
         if t == C.SEARCH_FACADE:
             for fid, (kind, pos, _) in TRUE_FIRES.items():
                 if kind == C.KIND_FACADE and G.floor_of(pos[2]) == g["floor"]:

@@ -255,3 +255,34 @@ def test_agent_waits_for_the_fires_its_search_reported():
     assert s.decide(WorldView(0.0, {"2": a}, {})) == []   # fire 7 not in /estimated_objects yet
     w = WorldView(0.0, {"2": a}, {7: FireView(7, 24.2, 8.2, 8.25, C.KIND_FACADE)})
     assert s.decide(w)[0].goal["fire_id"] == 7
+
+
+def test_a_crashed_uav_that_cannot_take_off_releases_its_floor():
+    m = FakeMission()
+    m.step(); m.step()
+    floor = [f for f, o in m.strategy.floor_owner.items() if o == "3"][0]
+    a = m.agents["3"]
+    a.ual_state = C.UAL_LANDED_DISARMED
+    m.fail_tasks.update({("3", t) for t in C.UAV_TASKS})
+    for _ in range(8):
+        m.step()
+    assert m.strategy.broken("3")
+    assert m.strategy.floor_owner.get(floor) != "3"
+    n = len([c for c, _ in m.log if c.agent_id == "3"])
+    m.step(); m.step()
+    assert len([c for c, _ in m.log if c.agent_id == "3"]) == n  # no more goals for it
+
+
+def test_exit_from_the_building_is_one_straight_waypoint_at_a_time():
+    s = Strategy()
+    room = s.p.layout.rooms[2][0]
+    deep = room.path[0]
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *deep[:3], ual_state=C.UAL_FLYING_AUTO, water_level=0.0,
+                  last_seen=0.0)
+    cmd = s.decide(WorldView(0.0, {"2": a}, {}))[0]
+    assert cmd.task == C.SEARCH_INDOOR and len(cmd.goal["path"]) == 1
+    assert math.dist(cmd.goal["path"][0][:3], room.inner) < 1e-6
+    s.on_result(cmd, True)
+    a.x, a.y, a.z = room.inner
+    cmd = s.decide(WorldView(1.0, {"2": a}, {}))[0]
+    assert cmd.task == C.SEARCH_INDOOR and math.dist(cmd.goal["path"][0][:3], room.entry[:3]) < 1e-6

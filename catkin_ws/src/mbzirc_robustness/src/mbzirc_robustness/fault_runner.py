@@ -260,6 +260,9 @@ class FaultSuite:
         fuzz = merge_fuzz_reports([r for r in (_read_json(p) for p in sorted(
             glob.glob(os.path.join(self.cfg.fuzz_dir, "fuzz_report*.json")))) if r])
         history = mon.history if mon else []
+        with open(os.path.join(self.out, "status_history.jsonl"), "w", encoding="utf-8") as fh:
+            for t, st in history:  # the central unit's view, for whoever checks a verdict by hand
+                fh.write(json.dumps({"t": t, "status": st}) + "\n")
         for f in self.cfg.schedule:
             if f.kind in (F.KIND_LINK_CUT, F.KIND_LINK_CUT_PERMANENT) and "t_cut" in f.result:
                 t_restore = f.result.get("t_restore")

@@ -107,7 +107,9 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
             reassigned.append(fl)  # released: no longer anyone's job (done, or next search pending)
         else:
             stuck.append(fl)
+    timeline = {fl: owner_changes(history, fl, t_cut - 10.0) for fl in owned}
     res: dict[str, Any] = {"robot": robot, "t_cut": t_cut, "t_restore": t_restore, "t_noticed": t_noticed,
+                           "owner_timeline": timeline,
                            "floors_owned_at_cut": owned, "floors_reassigned": reassigned,
                            "floors_not_reassigned": stuck, "mission_went_on": went_on}
     problems = []
@@ -126,6 +128,18 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     res["survived"] = not problems
     res["detail"] = "; ".join(problems) if problems else "ok"
     return res
+
+
+def owner_changes(history: list[tuple[float, dict[str, Any]]], floor: str, since: float) -> list[list[Any]]:
+    """[[sim time, owner], ...] each time the owner of ``floor`` (``f<n>`` / ``i<n>``) changed."""
+    out: list[list[Any]] = []
+    for t, s in history:
+        if t < since:
+            continue
+        o = _owner(s, floor)
+        if not out or out[-1][1] != o:
+            out.append([round(t, 1), o])
+    return out
 
 
 def robots_lost(history: list[tuple[float, dict[str, Any]]]) -> list[str]:

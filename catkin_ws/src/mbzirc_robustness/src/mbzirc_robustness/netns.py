@@ -4,7 +4,7 @@ Why: on the real system every UAV is its own computer on a Wi-Fi link that drops
 give each robot its own network stack and address (``ip netns``), wire them to a bridge that lives in
 its own "switch" namespace (so nothing touches the caller's network, and parallel labs never clash),
 run each robot's nodes inside its namespace with ``ROS_MASTER_URI`` / ``ROS_IP``, and cut a robot's link
-by setting its switch port down.
+by taking its switch port off the bridge.
 
 Layout of a lab owned by process <pid> (names ``<prefix>-<pid>-<host>``)::
 
@@ -12,7 +12,8 @@ Layout of a lab owned by process <pid> (names ``<prefix>-<pid>-<host>``)::
                               +-- p2 ==veth== eth0 in <prefix>-<pid>-uav1    10.77.0.2/24
                               +-- ...
 
-Everything is removed by ``close()`` (also on SIGTERM/SIGINT and at exit); ``cleanup_stale()`` removes
+A cut takes the robot's port off the bridge (``nomaster``): packets vanish without any local error, as on
+a faded Wi-Fi link. Everything is removed by ``close()`` (also on SIGTERM/SIGINT and at exit); ``cleanup_stale()`` removes
 labs whose owner process died without cleaning up (e.g. SIGKILL).
 """
 from __future__ import annotations
@@ -77,8 +78,15 @@ def switch_commands(sw: str) -> list[list[str]]:
 
 
 def link_commands(sw: str, host: Host, up: bool) -> list[list[str]]:
-    """Cut (``up=False``) or restore the link of ``host``: its switch port goes down or up."""
-    return [["ip", "-n", sw, "link", "set", host.port, "up" if up else "down"]]
+    """Cut (``up=False``) or restore the link of ``host`` by taking its port off the bridge / back on.
+
+    .. note:: the port stays up and the host keeps its carrier, so packets are lost far away, as on a
+       Wi-Fi link that fades: TCP backs off exponentially. Setting the port down instead makes the
+       host's own sends fail locally, which TCP retries almost at once (too kind a test).
+    """
+    if up:
+        return [["ip", "-n", sw, "link", "set", host.port, "master", "br0"]]
+    return [["ip", "-n", sw, "link", "set", host.port, "nomaster"]]
 
 
 def ros_env(master_ip: str, host_ip: str, base: dict[str, str] | None = None,

@@ -22,6 +22,7 @@ class DemoResult:
     before_cut: int = 0
     during_cut: int = 0
     after_restore: int = 0
+    resume_s: float | None = None  # wall seconds from the restore to the first message (TCP backoff)
     problems: list[str] = field(default_factory=list)
 
 
@@ -73,8 +74,11 @@ def talker_listener(lab: NetnsLab, cut_s: float = 4.0, workdir: str | None = Non
     if res.during_cut > 0:
         res.problems.append(f"{res.during_cut} messages crossed a cut link")
     lab.set_link("uav1", True)
+    t_restore = time.monotonic()
     back = count_lines(echo_log)
-    res.after_restore = wait_count(echo_log, back + 5, timeout=30) - back
+    if wait_count(echo_log, back + 1, timeout=max(30.0, 3 * cut_s)) > back:
+        res.resume_s = round(time.monotonic() - t_restore, 2)
+    res.after_restore = wait_count(echo_log, back + 5, timeout=10) - back
     if res.after_restore < 5:
         res.problems.append(f"only {res.after_restore} messages after the link came back")
     return res

@@ -34,6 +34,7 @@ def test_temporary_cut_survived_with_reassignment_and_return():
     assert r["survived"], r
     assert r["t_noticed"] == 26 and r["floors_owned_at_cut"] == ["f2"] and r["floors_reassigned"] == ["f2"]
     assert r["t_back"] == 85 and r["got_work_again"]
+    assert r["owner_timeline"] == {"f2": [[20, "2"], [26, None], [30, "3"]]}
 
 
 def test_cut_fails_when_never_noticed_or_floor_stuck_or_never_back():

@@ -62,7 +62,7 @@ class Concurrence(Container):
         self._done_cond = threading.Condition(threading.RLock())
         self._terminate = False
         self._user_code_exception: Optional[str] = None
-        self._initial_state_labels: list[str] = []
+        self._forwarded: set[str] = set()  # children that got this container's preempt request
 
     # ---- construction ---------------------------------------------------------------------------
     @staticmethod
@@ -130,6 +130,7 @@ class Concurrence(Container):
             self._is_running = True
             self._terminate = False
             self._user_code_exception = None
+            self._forwarded = set()
             self._child_outcomes = {label: None for label in self._states}
         try:
             self._copy_input_keys(parent_ud, self.userdata)
@@ -144,10 +145,12 @@ class Concurrence(Container):
                 self._done_cond.wait_for(lambda: self._terminate or self._preempt_requested
                                          or all(o is not None for o in self._child_outcomes.values()))
                 running = [label for label, o in self._child_outcomes.items() if o is None]
-            if running:
-                log.logdebug("SMACH Concurrence preempting running states: %s" % running)
-                for label in running:
-                    self._states[label].request_preempt()
+                if self._preempt_requested:
+                    self._forwarded.update(running)
+                if running:
+                    log.logdebug("SMACH Concurrence preempting running states: %s" % running)
+                    for label in running:
+                        self._states[label].request_preempt()
             for thread in self._threads.values():
                 while thread.is_alive():
                     thread.join(0.1)
@@ -156,21 +159,27 @@ class Concurrence(Container):
             if self._user_code_exception is not None:
                 raise InvalidUserCodeError("A concurrent state raised an exception during execution: "
                                            + self._user_code_exception)
-            if self._preempt_requested:
+            with self._done_cond:
+                forwarded = set(self._forwarded)
+                preempted = self._preempt_requested
+            if preempted and forwarded:
                 serviced = True
-                for label, state in self._states.items():
-                    if state.preempt_requested():
+                for label in forwarded:
+                    if self._states[label].preempt_requested():
                         serviced = False
                         log.logwarn("State '%s' in concurrence did not service preempt." % label)
-                        state.recall_preempt()
+                        self._states[label].recall_preempt()
                 if serviced:
                     log.loginfo("Concurrence serviced preempt.")
                     self.service_preempt()
-            else:
-                # children preempted by the policy: withdraw the requests they did not service
-                for label in running:
-                    if self._states[label].preempt_requested():
-                        self._states[label].recall_preempt()
+            elif preempted:
+                # it arrived when every child had already finished: nobody serviced it, so the flag stays
+                # and the parent passes it on (upstream silently dropped it here)
+                log.loginfo("Concurrence preempted after all its children finished; leaving it to the parent.")
+            # children preempted by the policy: withdraw the requests they did not service
+            for label in running:
+                if label not in forwarded and self._states[label].preempt_requested():
+                    self._states[label].recall_preempt()
             outcomes = dict(self._child_outcomes)
             log.loginfo("Concurrent Outcomes: " + str(outcomes))
             outcome = self._decide_outcome(outcomes)
@@ -245,8 +254,16 @@ class Concurrence(Container):
         """Preempt the container: every child still running is asked to stop."""
         with self._done_cond:
             self._preempt_requested = True
+            if self._is_running:
+                for label, outcome in self._child_outcomes.items():
+                    if outcome is None and label not in self._forwarded:
+                        self._forwarded.add(label)
+                        self._states[label].request_preempt()
             self._done_cond.notify_all()
 
     def recall_preempt(self) -> None:
         with self._done_cond:
             self._preempt_requested = False
+            for label in self._forwarded:
+                if self._states[label].preempt_requested():
+                    self._states[label].recall_preempt()

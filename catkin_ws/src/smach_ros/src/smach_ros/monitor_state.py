@@ -28,6 +28,7 @@ class MonitorState(smach.State):
         self._cond_cb = cond_cb
         self._max_checks = max_checks
         self._n_checks = 0
+        self._invalid = False
         self._trigger_event = threading.Event()
         self._lock = threading.Lock()
 

@@ -32,6 +32,7 @@ UGV_RADIUS = 0.6           # m (must fit through a 2.5 m door)
 UGV_BODY_OFFSET_Z = 0.5    # m
 UGV_HEIGHT = 1.0           # m
 UGV_SENSOR_Z = 0.8         # m: the UGV's laser, thermal and RGB-D sit this high above base_link
+UGV_NOZZLE_Z = 1.5         # m: the UGV's nozzle on a mast, level with the indoor fires (1.5 m above the floor)
 
 # --- water and blanket ---
 TANK_LITRES = 2.0          # L per refill

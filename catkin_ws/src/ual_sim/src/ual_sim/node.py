@@ -39,6 +39,18 @@ from .world import WorldError, load_world
 Q = 10  # publisher queue size: rospy then writes to sockets from its own threads, not from the sim loop
 
 
+_last_err: dict = {}
+
+
+def logerr_throttled(key: str, period: float, text: str) -> None:
+    """rospy.logerr at most once per `period` wall seconds per key (rospy's throttle is per source line and
+    counts sim time, so at 10x it would flood, and one robot's error would hide another's)."""
+    now = time.monotonic()
+    if now - _last_err.get(key, -1e9) >= period:
+        _last_err[key] = now
+        rospy.logerr(text)
+
+
 def yaw_quat(yaw: float) -> Quaternion:
     return Quaternion(0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
 
@@ -120,7 +132,7 @@ class RobotIO:
 
     def _comm(self, what: str) -> bool:
         if not self.r.comm_ok(self.node.sim.time):
-            rospy.logerr_throttle(2.0, f"[ual_sim] {self.ns}: {what} ignored (communication lost)")
+            logerr_throttled(self.ns + "comm", 2.0, f"[ual_sim] {self.ns}: {what} ignored (communication lost)")
             return False
         return True
 
@@ -174,7 +186,7 @@ class RobotIO:
         with self.node.sim.lock:
             ok, msg = fn(self.rid)
         if not ok:
-            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} actuator: {msg}")
+            logerr_throttled(self.ns + "act" + msg, 1.0, f"[ual_sim] {self.ns} actuator: {msg}")
         return TriggerResponse(ok, msg)
 
     def on_set_velocity(self, msg: TwistStamped) -> None:
@@ -188,7 +200,7 @@ class RobotIO:
                 v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
             ok, err = self.r.set_velocity(v, self.node.sim.time)
         if not ok:
-            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} set_velocity: {err}")
+            logerr_throttled(self.ns + "vel", 1.0, f"[ual_sim] {self.ns} set_velocity: {err}")
 
     def on_set_pose(self, msg: PoseStamped) -> None:
         if not self._comm("set_pose"):
@@ -199,7 +211,7 @@ class RobotIO:
             yaw = quat_yaw(q) if qn > 1e-6 else self.r.yaw
             ok, err = self.r.go_to(p.x, p.y, p.z, yaw)
         if not ok:
-            rospy.logerr_throttle(1.0, f"[ual_sim] {self.ns} set_pose: {err}")
+            logerr_throttled(self.ns + "pose", 1.0, f"[ual_sim] {self.ns} set_pose: {err}")
 
     # ------------------------------------------------------------------ outputs
     def publish(self, now: float, stamp: rospy.Time) -> Optional[TransformStamped]:
@@ -381,10 +393,10 @@ class SimNode:
     # ------------------------------------------------------------------ helpers
     def timed(self, name: str, fn: Callable[[], None]) -> None:
         """Run fn and account its CPU time per sensor frame (reported in the log and by the benchmark)."""
-        t0 = time.process_time()
+        t0 = time.thread_time()
         fn()
         acc = self.cpu.setdefault(name, [0.0, 0])
-        acc[0] += time.process_time() - t0
+        acc[0] += time.thread_time() - t0
         acc[1] += 1
 
     def wait_for(self, r: Robot) -> None:
@@ -409,7 +421,7 @@ class SimNode:
         rtf = prm["rtf"]
         wall0 = time.monotonic()
         sim_t0 = self.sim.time
-        last_report_wall, last_report_sim = wall0, sim_t0
+        last_report_wall, last_report_sim, last_log_wall = wall0, sim_t0, wall0
         self.pub_clock.publish(Clock(rospy.Time(0)))
         while not rospy.is_shutdown():
             with self.sim.lock:
@@ -430,8 +442,10 @@ class SimNode:
             if wall - last_report_wall >= 1.0:
                 achieved = (now - last_report_sim) / (wall - last_report_wall)
                 self.pub_rtf.publish(Float32(achieved))
-                rospy.loginfo_throttle(10.0, f"[ual_sim] real-time factor {achieved:.2f} (target {rtf:g}); "
-                                       + self.cpu_report())
+                if wall - last_log_wall >= 10.0:   # every 10 s of wall time, whatever the factor
+                    rospy.loginfo(f"[ual_sim] real-time factor {achieved:.2f} (target {rtf:g}); "
+                                  + self.cpu_report())
+                    last_log_wall = wall
                 last_report_wall, last_report_sim = wall, now
             if rtf > 0:
                 ahead = (now - sim_t0) / rtf - (wall - wall0)

@@ -288,5 +288,5 @@ class Robot:
         """Nozzle position and unit direction (base_link +x) in the arena frame."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         ox, oy, oz = C.NOZZLE_OFFSET
-        p = self.pos + np.array([c * ox - s * oy, s * ox + c * oy, oz])
+        p = self.pos + np.array([c * ox - s * oy, s * ox + c * oy, oz + (0.0 if self.is_uav else C.UGV_NOZZLE_Z)])
         return p, np.array([c, s, 0.0])

@@ -117,8 +117,9 @@ class Simulation:
     def _crash(self, r: Robot, reason: str) -> None:
         if r.crashed:
             return
+        where = f"({r.pos[0]:.2f}, {r.pos[1]:.2f}, {r.pos[2]:.2f}) yaw {r.yaw:.2f}"
         r.crash(reason)
-        self.events.append(Event(self.time, f"robot {r.id} crashed: {reason}"))
+        self.events.append(Event(self.time, f"robot {r.id} crashed: {reason} at {where}"))
 
     # ------------------------------------------------------------------ actuators
     def start_pump(self, rid: int) -> tuple[bool, str]:

@@ -277,3 +277,15 @@ def test_markers_cover_world_robots_fires():
     assert {"building", "fires", "robots", "jets"} <= ns
     assert sum(m.ns == "building" for m in ma.markers) == len(s.world.bmin)
     assert sum(m.ns == "fires" for m in ma.markers) == len(s.fires.fires)
+
+
+def test_ugv_puts_out_ground_floor_indoor_fire(sim):
+    u = sim.robots[0]
+    f = sim.fires.by_id("in0_w")                       # (17.7, 8.5, 1.5) facing -x, west room of the ground floor
+    f.active = True
+    for goal, yaw in (((14.25, 3.0), math.pi / 2), ((14.25, 8.5), 0.0), ((17.7 - 2.3, 8.5), 0.0)):
+        assert u.go_to(goal[0], goal[1], 0.0, yaw)[0]
+        assert run_until(sim, u.goal_reached, 60.0)
+    assert not u.crashed
+    sim.start_pump(0)
+    assert run_until(sim, lambda: f.extinguished, 20.0)

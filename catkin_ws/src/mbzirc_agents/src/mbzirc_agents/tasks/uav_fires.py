@@ -53,7 +53,7 @@ class SensedObjects:
     def __init__(self, task: AgentTask) -> None:
         self.task = task
         self.lock = threading.Lock()
-        self.holes: list = []            # body-frame points
+        self.holes: list = []            # (body-frame point, radius m)
         self.holes_time = -1e9
         self.fire: Optional[tuple] = None  # (arena position, body relative position, camera direction)
         self.fire_time = -1e9
@@ -70,13 +70,14 @@ class SensedObjects:
                 a.backend.logerr_throttle(5.0, 'sensed_objects: NaN position, ignored')
                 continue
             if d.type == C.TYPE_HOLE:
-                holes.append(self._to_body(d.header.frame_id, (p.x, p.y, p.z)))
+                b = self._to_body(d.header.frame_id, (p.x, p.y, p.z))
+                if b is not None:
+                    holes.append((b, float(d.scale.x)))
             elif d.type == C.TYPE_FIRE:
                 r = d.relative_position
                 with self.lock:
                     self.fire = ((p.x, p.y, p.z), (r.x, r.y, r.z), d.image_detection.camera_direction)
                     self.fire_time = now
-        holes = [h for h in holes if h is not None]
         if holes:
             with self.lock:
                 self.holes, self.holes_time = holes, now
@@ -100,6 +101,21 @@ class SensedObjects:
     def recent_fire(self, max_age: float) -> Optional[tuple]:
         with self.lock:
             return self.fire if self.task.agent.backend.now() - self.fire_time <= max_age else None
+
+
+def choose_hole(holes: list) -> Optional[np.ndarray]:
+    """The middle circle of a holder (hole between two decoys) among (body point, radius) circles.
+
+    Uses the circle_detector library's choice when it is installed (it checks spacing and radii), else
+    the middle one by lateral position.
+    """
+    try:
+        from circle_detector.hole_choice import choose_middle_hole
+    except ImportError:
+        return pick_hole([h for h, _ in holes]) if len(holes) >= 3 else None
+    optical = [(-h[1], -h[2], h[0] - CAM_OFFSET_X, r) for h, r in holes]   # x right, y down, z forward
+    i = choose_middle_hole(optical)
+    return None if i is None else holes[i][0]
 
 
 class SearchFacade(AgentTask):
@@ -225,10 +241,12 @@ class ExtinguishFacadeFire(AgentTask):
         holes = self.sensed.recent_holes(0.5)
         if holes:
             expected = world_to_body(fire - p[:3], p[3])
-            if len(holes) >= 3:
-                return pick_hole(holes), 'hole'
-            best = min(holes, key=lambda h: np.linalg.norm(h[1:] - expected[1:]))
-            return best, 'hole'
+            middle = choose_hole(holes)
+            if middle is not None and np.linalg.norm(middle[1:] - expected[1:]) < 1.0:
+                return middle, 'hole'
+            best = min((h for h, _ in holes), key=lambda h: np.linalg.norm(h[1:] - expected[1:]))
+            if np.linalg.norm(best[1:] - expected[1:]) < 0.5:
+                return best, 'hole'
         det = self.sensed.recent_fire(0.5)
         if det is not None and det[2] == C.CAMERA_FORWARD:
             return np.array(det[1]), 'thermal'

@@ -4,7 +4,7 @@ import threading
 import pytest
 
 import smach
-from helpers import Const
+from smach_test_helpers import Const
 
 
 def make_counter_sm():

@@ -5,7 +5,7 @@ import time
 import pytest
 
 import smach
-from helpers import Const, Waiter
+from smach_test_helpers import Const, Waiter
 
 
 class Sleeper(smach.State):
@@ -210,3 +210,26 @@ def test_nested_concurrence_in_state_machine_preempts():
     t.join(3)
     assert box["o"] == "preempted"
     assert not sm.preempt_requested()
+
+
+def test_preempt_after_all_children_finished_is_not_lost():
+    # the request arrives after the last child ended but before the container returned: nobody could
+    # service it, so it must stay requested and reach the next state of the parent machine
+    cc = smach.Concurrence(outcomes=["done", "preempted"], default_outcome="done")
+    with cc:
+        smach.Concurrence.add("A", Const("done"))
+
+    def late_preempt(outcomes):
+        if all(o is not None for o in outcomes.values()):
+            sm.request_preempt()
+        return False
+
+    cc._child_termination_cb = late_preempt
+    nxt = Waiter(timeout=2)
+    sm = smach.StateMachine(outcomes=["done", "preempted"])
+    with sm:
+        smach.StateMachine.add("CC", cc, transitions={"done": "NEXT"})
+        smach.StateMachine.add("NEXT", nxt)
+    assert sm.execute() == "preempted"
+    assert nxt.saw_preempt_at_start is True
+    assert not sm.preempt_requested() and not cc.preempt_requested()

@@ -4,7 +4,7 @@ import threading
 import time
 
 import smach
-from helpers import Const, Waiter
+from smach_test_helpers import Const, Waiter
 
 
 def run_in_thread(sm, ud=None):

@@ -4,7 +4,7 @@ import threading
 import pytest
 
 import smach
-from helpers import Waiter
+from smach_test_helpers import Waiter
 
 
 def collector(outcome_for=lambda item: "continue"):

@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Benchmark of the smach core and the introspection codec (pure Python, no ROS master).
+
+Figures (all measured in this run):
+* StateMachine transitions per second on a two-state CBState loop, and the overhead per transition
+  relative to calling the same callbacks in a plain Python loop (ratio);
+* mean time of one Concurrence run with 4 instant children (thread start and join cost);
+* time to encode a 100-key userdata as introspection local_data, and to decode it with the safe unpickler.
+Writes bench/results/smach.json.
+"""
+import json
+import os
+import statistics
+import time
+
+import smach
+from smach_ros.userdata_codec import decode_local_data, encode_local_data
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+N_TRANSITIONS = 20000
+
+
+def quiet():
+    noop = lambda msg: None  # noqa: E731
+    smach.set_loggers(noop, noop, noop, noop)
+
+
+def bench_transitions():
+    counter = {"n": 0}
+
+    @smach.cb_interface(outcomes=["next", "end"], input_keys=["n"], output_keys=["n"])
+    def ping(ud):
+        ud.n = ud.n + 1
+        return "end" if ud.n >= N_TRANSITIONS else "next"
+
+    @smach.cb_interface(outcomes=["next"])
+    def pong(ud):
+        return "next"
+
+    sm = smach.StateMachine(outcomes=["end"])
+    sm.userdata.n = 0
+    with sm:
+        smach.StateMachine.add("PING", smach.CBState(ping), transitions={"next": "PONG", "end": "end"})
+        smach.StateMachine.add("PONG", smach.CBState(pong), transitions={"next": "PING"})
+    t0 = time.perf_counter()
+    sm.execute()
+    t_sm = time.perf_counter() - t0
+    transitions = 2 * N_TRANSITIONS - 1
+
+    data = {"n": 0}
+    t0 = time.perf_counter()
+    state = "PING"
+    while True:
+        if state == "PING":
+            data["n"] += 1
+            counter["n"] += 1
+            if data["n"] >= N_TRANSITIONS:
+                break
+            state = "PONG"
+        else:
+            state = "PING"
+    t_plain = time.perf_counter() - t0
+    return {"transitions": transitions, "transitions_per_s": transitions / t_sm,
+            "us_per_transition": 1e6 * t_sm / transitions,
+            "overhead_ratio_vs_plain_loop": t_sm / max(t_plain, 1e-9)}
+
+
+def bench_concurrence(runs=200):
+    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
+    with cc:
+        for i in range(4):
+            smach.Concurrence.add("C%d" % i, smach.CBState(lambda ud: "done", outcomes=["done"]))
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        cc.execute()
+        times.append(time.perf_counter() - t0)
+    return {"runs": runs, "children": 4, "mean_ms": 1e3 * statistics.mean(times),
+            "p95_ms": 1e3 * sorted(times)[int(0.95 * runs)]}
+
+
+def bench_codec(reps=300):
+    data = {"key%d" % i: ([i, float(i), "v%d" % i] if i % 2 else {"x": i}) for i in range(100)}
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        text = encode_local_data(data)
+    t_enc = (time.perf_counter() - t0) / reps
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        decode_local_data(text)
+    t_safe = (time.perf_counter() - t0) / reps
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        decode_local_data(text, allow_unsafe=True)
+    t_unsafe = (time.perf_counter() - t0) / reps
+    return {"keys": 100, "encoded_chars": len(text), "encode_us": 1e6 * t_enc, "safe_decode_us": 1e6 * t_safe,
+            "unsafe_decode_us": 1e6 * t_unsafe, "safe_over_unsafe_ratio": t_safe / max(t_unsafe, 1e-12)}
+
+
+def main():
+    quiet()
+    out = {"transitions": bench_transitions(), "concurrence": bench_concurrence(), "codec": bench_codec()}
+    print(json.dumps(out, indent=2))
+    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
+    with open(os.path.join(HERE, "results", "smach.json"), "w") as f:
+        json.dump(out, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
