@@ -27,9 +27,10 @@ test: setup
 # Separate from `make test`: it runs a whole mission (about 4 minutes at RTF 4 on an idle machine,
 # far longer on a loaded one) and needs root for ip netns.
 test-faults: setup
-	@mkdir -p results/robustness && source env.sh && echo "fuzzing every node (rostest fuzz_project_nodes)" && \
-	  { unshare -n sh -c 'ip link set lo up; exec rostest mbzirc_robustness fuzz_project_nodes.test' \
-	    > results/robustness/fuzz.log 2>&1 || echo "fuzz: FAILED, see results/robustness/fuzz.log"; } && \
+	@mkdir -p results/robustness && source env.sh && for t in fuzz_project_nodes fuzz_mission_nodes; do \
+	    echo "fuzzing every input of the nodes of $$t.test"; \
+	    unshare -n sh -c "ip link set lo up; exec rostest mbzirc_robustness $$t.test" \
+	      > results/robustness/$$t.log 2>&1 || echo "fuzz: $$t FAILED, see results/robustness/$$t.log"; done; \
 	  rosrun mbzirc_robustness fault_suite --seed $(SEED) --uavs $(UAVS) --rtf $(RTF)
 
 bench: setup

@@ -102,7 +102,25 @@ class TestUavMotion(unittest.TestCase):
             self.assertTrue(wait_wall(lambda: self.sim.poses[r][2] < 0.2, 3), self.sim.poses[r])
         self.assertEqual(self.crashed, [])
 
-    def test_5_heartbeat_loss(self):
+    def test_5_enter_building_through_a_window(self):
+        state, res = run(2, 'take_off', 'TakeOff', 60, height=3.0)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        # first-floor window of facade A: x 14.5-16.5, z 6.5-8.5 at y = 19.5
+        state, res = run(2, 'enter_building', 'EnterBuilding', 120, floor=1,
+                         entry=pose(15.5, 21.0, 7.5, -math.pi / 2))
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        time.sleep(0.5)
+        x, y, z = self.sim.poses[2]
+        self.assertTrue(11.6 < x < 24.0 and 6.9 < y < 19.3 and 5.0 < z < 9.5, f'not inside: {x}, {y}, {z}')
+        state, res = run(2, 'go_to', 'GoTo', 60, waypoint=pose(15.5, 22.0, 7.5))   # back out
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        state, res = run(2, 'enter_building', 'EnterBuilding', 30, floor=0,
+                         entry=pose(15.5, 21.0, 7.5, -math.pi / 2))
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertIn('floor 0', res.message)
+        self.assertEqual(self.crashed, [])
+
+    def test_9_heartbeat_loss(self):
         hb = rospy.Publisher('/central_unit/heartbeat', Header, queue_size=1)
         beat = rospy.Timer(rospy.Duration(0.5), lambda e: hb.publish(Header(stamp=rospy.Time.now())))
         time.sleep(1.0)

@@ -61,6 +61,20 @@ ROTATION_SEARCH_OFFSETS = (-0.16, -0.12, -0.08, -0.04, 0.0, 0.04, 0.08, 0.12, 0.
 #: the linearisation running away, not the true motion.
 MAX_ROTATION_STEP = 0.2
 
+#: Recovery search: when a match fits much worse than the recent ones (residual above RECOVERY_FACTOR
+#: times their running mean and above RECOVERY_MIN_RESIDUAL), candidate poses on a grid of
+#: RECOVERY_TRANSLATIONS x RECOVERY_TRANSLATIONS x RECOVERY_ROTATIONS offsets around the prediction are
+#: scored on the coarsest level in one batch, the RECOVERY_CANDIDATES best are matched coarse-to-fine, and
+#: the best fit wins (the first match included). It catches a match that fell out of its basin after
+#: dropped scans or a sudden change of motion, at no cost while tracking is good.
+RECOVERY_FACTOR = 3.0
+RECOVERY_MIN_RESIDUAL = 0.05
+RECOVERY_TRANSLATIONS = (-0.3, -0.15, 0.0, 0.15, 0.3)
+RECOVERY_ROTATIONS = (-0.4, -0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3, 0.4)
+RECOVERY_CANDIDATES = 3
+#: Weight of a new residual in the running mean the recovery test compares with.
+RESIDUAL_AVERAGE_WEIGHT = 0.1
+
 #: A scan with fewer usable points than this is not matched (the matching problem is under-determined).
 MIN_SCAN_POINTS = 10
 

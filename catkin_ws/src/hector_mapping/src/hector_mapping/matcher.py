@@ -52,6 +52,18 @@ def residual(level: GridLevel, pts: np.ndarray, pose: np.ndarray) -> float:
     return float(np.dot(r, r)) / max(len(r), 1)
 
 
+def residuals(level: GridLevel, pts: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Mean of (1 - M)^2 over the scan points for each of the candidate poses (C, 3), in one batch."""
+    poses = np.asarray(poses, np.float64)
+    c = np.cos(poses[:, 2])[:, None]
+    s = np.sin(poses[:, 2])[:, None]
+    wx = c * pts[None, :, 0] - s * pts[None, :, 1] + poses[:, 0:1]
+    wy = s * pts[None, :, 0] + c * pts[None, :, 1] + poses[:, 1:2]
+    m, _, _ = level.interpolate(np.stack((wx.reshape(-1), wy.reshape(-1)), axis=1))
+    r = 1.0 - m.reshape(poses.shape[0], pts.shape[0])
+    return np.mean(r * r, axis=1)
+
+
 def _linearise(level: GridLevel, pts: np.ndarray, pose: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, float]:
     """H = J^T J, g = J^T r and the mean squared residual at ``pose``."""

@@ -13,10 +13,12 @@ from typing import Optional
 import numpy as np
 
 from .constants import (COVARIANCE_FLOOR, ITERATION_EXTENSION, ITERATIONS_COARSE, ITERATIONS_FINE,
-                        MIN_SCAN_POINTS, ROTATION_SEARCH_OFFSETS)
+                        MIN_SCAN_POINTS, RECOVERY_CANDIDATES, RECOVERY_FACTOR, RECOVERY_MIN_RESIDUAL,
+                        RECOVERY_ROTATIONS, RECOVERY_TRANSLATIONS, RESIDUAL_AVERAGE_WEIGHT,
+                        ROTATION_SEARCH_OFFSETS)
 from .geometry import transform_points, wrap_angle
 from .grid import GridLevel
-from .matcher import best_rotation, match_level
+from .matcher import MatchResult, best_rotation, match_level, residuals
 
 
 @dataclass
@@ -42,6 +44,9 @@ class SlamParams:
     #: Keep iterating (up to constants.ITERATION_EXTENSION times the nominal count) while the steps are
     #: still large; False gives the original's fixed iteration counts.
     iterate_to_convergence: bool = True
+    #: Search a wider set of starting poses when a match fits much worse than the recent ones (not in
+    #: the original; see constants.RECOVERY_*).
+    recovery_search: bool = True
 
 
 @dataclass
@@ -69,6 +74,8 @@ class _MotionState:
     last_stamp: Optional[float] = None
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     last_update_pose: Optional[np.ndarray] = None
+    residual_mean: Optional[float] = None
+    recoveries: int = 0
 
 
 class HectorSlam:
@@ -135,17 +142,16 @@ class HectorSlam:
             pose = self.pose.copy()
             cov = np.diag(COVARIANCE_FLOOR)
         else:
-            guess = self._predict(stamp)
+            predicted = self._predict(stamp)
+            guess = predicted
             if self.params.rotation_search:
                 guess = best_rotation(self.levels[-1], points, guess, ROTATION_SEARCH_OFFSETS)
-            result = None
-            for i in reversed(range(len(self.levels))):
-                iters = ITERATIONS_FINE if i == 0 else ITERATIONS_COARSE
-                result = match_level(self.levels[i], points, guess, iters,
-                                     ITERATION_EXTENSION if self.params.iterate_to_convergence else 1)
-                guess = result.pose
-            assert result is not None
+            result = self._coarse_to_fine(points, guess)
+            if self.params.recovery_search and self._fits_badly(result.residual):
+                result = self._recover(points, predicted, result)
             pose, residual = result.pose, result.residual
+            w = RESIDUAL_AVERAGE_WEIGHT
+            st.residual_mean = residual if st.residual_mean is None else (1 - w) * st.residual_mean + w * residual
             cov = self._covariance(result.hessian, residual, points.shape[0])
         updated = self._should_update(pose)
         if updated:
@@ -154,6 +160,43 @@ class HectorSlam:
         self.pose = pose
         self.covariance = cov
         return SlamStep(pose.copy(), cov, updated, residual)
+
+    @property
+    def recoveries(self) -> int:
+        """How many times the recovery search replaced a match since the last reset."""
+        return self._state.recoveries
+
+    def _coarse_to_fine(self, points: np.ndarray, guess: np.ndarray) -> MatchResult:
+        """Match on every level from the coarsest to the finest, each starting where the last ended."""
+        result = None
+        for i in reversed(range(len(self.levels))):
+            iters = ITERATIONS_FINE if i == 0 else ITERATIONS_COARSE
+            result = match_level(self.levels[i], points, guess, iters,
+                                 ITERATION_EXTENSION if self.params.iterate_to_convergence else 1)
+            guess = result.pose
+        assert result is not None
+        return result
+
+    def _fits_badly(self, residual: float) -> bool:
+        """Whether a match fits much worse than the recent ones."""
+        mean = self._state.residual_mean
+        return mean is not None and residual > max(RECOVERY_MIN_RESIDUAL, RECOVERY_FACTOR * mean)
+
+    def _recover(self, points: np.ndarray, predicted: np.ndarray, first: MatchResult) -> MatchResult:
+        """Best of the first match and coarse-to-fine matches from the best grid candidates."""
+        t = np.asarray(RECOVERY_TRANSLATIONS)
+        r = np.asarray(RECOVERY_ROTATIONS)
+        dx, dy, dth = np.meshgrid(t, t, r, indexing="ij")
+        cands = predicted + np.stack((dx.ravel(), dy.ravel(), dth.ravel()), axis=1)
+        scores = residuals(self.levels[-1], points, cands)
+        best = first
+        for k in np.argsort(scores)[:RECOVERY_CANDIDATES]:
+            res = self._coarse_to_fine(points, cands[k])
+            if res.residual < best.residual:
+                best = res
+        if best is not first:
+            self._state.recoveries += 1
+        return best
 
     def insert(self, points: np.ndarray, laser_origin: np.ndarray, pose: np.ndarray) -> None:
         """Insert a scan into every level at ``pose`` (beams from the laser origin to the points)."""

@@ -98,6 +98,7 @@ class CentralUnit:
             facade_searches=int(rospy.get_param("~searches", 2)),
             second_search_first=bool(rospy.get_param("~second_search_first", True)),
             max_failures=int(rospy.get_param("~max_failures", C.MAX_TASK_FAILURES)),
+            uavs_take_ground_floor_indoors=bool(rospy.get_param("~uavs_take_ground_floor_indoors", False)),
         )
         self.strategy = Strategy(params)
         self.lock = threading.Lock()

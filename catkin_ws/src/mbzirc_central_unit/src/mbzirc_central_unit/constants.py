@@ -82,7 +82,7 @@ INDOOR_ENTRIES = {
     2: (9.0, 13.0, 12.5, 0.0),
 }
 # Open area where a second ground search sweeps (xmin, ymin, xmax, ymax) and its sweep spacing.
-GROUND_SEARCH_AREA = (-14.0, 6.0, 9.0, 28.0)  # keeps clear of the home (take-off) area
+GROUND_SEARCH_AREA = (-14.0, 6.0, 6.5, 29.0)  # keeps clear of the home (take-off) area
 
 # ---- strategy defaults (each is also a ~param of the node) ------------------------------------------
 AGENT_TIMEOUT = 5.0             # s of data_feed silence before an agent's work is reassigned
@@ -91,6 +91,9 @@ INDOOR_FLOORS = (1, 2)          # floors the UAVs search indoors (floor 0 is the
 FACADE_STANDOFF = 2.5           # m from the wall when searching a facade (thermal reliable 2-4 m)
 ROUTE_MARGIN = 2.5              # m kept from the building when routing around it
 ELEVATOR_MARGIN = 6.0           # m from the tower corners to the virtual elevators
+# The virtual elevators (x, y): north-west of the tower (4.5 m from the outdoor holder at (5, 25)) and
+# south-east of the extension's south wall.
+ELEVATORS = ((9.0, 27.0), (30.2, 0.7))
 FIRE_DISTANCE = 2.0             # m from the hole for go_to_facade_fire (jet range 3 m; more room to the wall)
 MIN_WATER = 0.8                 # litres: below this a water UAV refills first (a fire takes about 1 L)
 GROUND_SEARCH_ALTITUDE = 4.0  # downward thermal footprint about 2.4 m wide

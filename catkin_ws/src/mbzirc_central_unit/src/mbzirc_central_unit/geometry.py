@@ -128,7 +128,13 @@ def level_route(p: Point, q: Point, z: float, margin: float = C.ROUTE_MARGIN) ->
 
 
 def elevator_points(margin: float = C.ELEVATOR_MARGIN) -> list[tuple[float, float]]:
-    """The two virtual elevators: opposite (north-west and south-east) corners of the tower."""
+    """The two virtual elevators: off the opposite (north-west and south-east) corners of the tower.
+
+    .. note:: With the default margin they are the fixed C.ELEVATORS, placed away from the outdoor fire
+       holders: a blanket UAV descending on a fire must never wait for an elevator's reserved column.
+    """
+    if margin == C.ELEVATOR_MARGIN:
+        return [tuple(e) for e in C.ELEVATORS]
     t = C.TOWER_BOX
     return [(t[0] - margin, t[4] + margin), (t[3] + margin, t[1] - margin)]
 

@@ -92,3 +92,10 @@ def test_ground_paths():
     assert math.dist(path[2][:2], (-9.0, 20.0)) < 0.35 and math.dist(path[3][:2], (-9.0, 20.0)) < 0.35
     sweep = G.lawnmower_path((0, 0, 10, 8), 4.0, 3.0)
     assert {p[1] for p in sweep} == {0, 4, 8} and all(p[2] == 3.0 for p in sweep)
+
+
+def test_elevators_keep_clear_of_outdoor_fire_holders_and_the_building():
+    from mbzirc_central_unit.layout import DEFAULT_GROUND_HOLDERS
+    for e in G.elevator_points():
+        assert min(math.dist(e, h[:2]) for h in DEFAULT_GROUND_HOLDERS) > 4.0
+        assert G.obstacle_rect(1.0, 3.0) is None or not G.inside(e, G.obstacle_rect(1.0, 3.0))

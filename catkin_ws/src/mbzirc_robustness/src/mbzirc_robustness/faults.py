@@ -85,7 +85,8 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     """Verdict on one link cut from the central unit's status history [(sim time, status), ...].
 
     Survived when: the central unit marked the robot silent, kept running through the cut (no status gap
-    longer than ``max_gap_s``), gave every floor the robot owned to another robot (or finished it), and,
+    longer than ``max_gap_s``), gave every floor the robot owned to another robot (or released it; keeping
+    it counts only when no other robot was alive and idle meanwhile), and,
     for a temporary cut, saw the robot alive again after the restore. Whether it got work again is reported.
     """
     robot = str(robot)
@@ -98,27 +99,34 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     times = [t_cut] + [t for t, _ in after if t <= min(window_end, after[-1][0] if after else t_cut)]
     gaps = [b - a for a, b in zip(times, times[1:])]
     went_on = bool(after) and (max(gaps) if gaps else 0.0) <= max_gap_s
-    reassigned, stuck = [], []
+    reassigned, stuck, kept = [], [], []
+    silent = [s for t, s in after if t_noticed is not None and t_noticed <= t <= window_end]
+    # robots that were alive and idle at some point while this one was silent: they could have taken its floor
+    free = sorted({r for s in silent for r, a in (s.get("agents") or {}).items()
+                   if r != robot and a.get("alive") and not a.get("task")})
     for fl in owned:
         later = [s for t, s in after if t_noticed is not None and t >= t_noticed]
         if any(_owner(s, fl) not in (None, robot) for s in later):
             reassigned.append(fl)
         elif later and _owner(later[-1], fl) is None:
             reassigned.append(fl)  # released: no longer anyone's job (done, or next search pending)
+        elif not free:
+            kept.append(fl)  # nobody was free to take it: not the central unit's fault
         else:
             stuck.append(fl)
     timeline = {fl: owner_changes(history, fl, t_cut - 10.0) for fl in owned}
     res: dict[str, Any] = {"robot": robot, "t_cut": t_cut, "t_restore": t_restore, "t_noticed": t_noticed,
                            "owner_timeline": timeline,
                            "floors_owned_at_cut": owned, "floors_reassigned": reassigned,
-                           "floors_not_reassigned": stuck, "mission_went_on": went_on}
+                           "floors_not_reassigned": stuck, "floors_kept_no_free_robot": kept,
+                           "free_robots_during_silence": free, "mission_went_on": went_on}
     problems = []
     if t_noticed is None:
         problems.append("central unit never marked the robot silent")
     if not went_on:
         problems.append("central unit status stopped during the cut")
     if stuck:
-        problems.append(f"floors still owned by the silent robot: {stuck}")
+        problems.append(f"floors still owned by the silent robot although {free} were free: {stuck}")
     if t_restore is not None:
         back = [(t, s) for t, s in history if t > t_restore and _agent(s, robot).get("alive")]
         res["t_back"] = back[0][0] if back else None

@@ -42,11 +42,17 @@ def test_cut_fails_when_never_noticed_or_floor_stuck_or_never_back():
          status(40, {"2": True}, {"2": "2"})]
     r = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=35)
     assert not r["survived"] and "never marked" in r["detail"]
-    h2 = [status(10, {"2": True}, {"2": "2"}), status(25, {"2": False}, {"2": "2"}),
-          status(90, {"2": False}, {"2": "2"})]
+    h2 = [status(10, {"2": True, "3": True}, {"2": "2"}), status(25, {"2": False, "3": True}, {"2": "2"}),
+          status(90, {"2": False, "3": True}, {"2": "2"})]
     r2 = F.evaluate_link_cut(h2, "2", t_cut=20, t_restore=80)
     assert not r2["survived"]
-    assert "still owned" in r2["detail"] and "never came back" in r2["detail"]
+    assert "still owned" in r2["detail"] and "['3'] were free" in r2["detail"] and "never came back" in r2["detail"]
+    busy = [status(t, a, o, tasks={"3": "search_facade"}) for t, a, o in
+            ((10, {"2": True, "3": True}, {"2": "2"}), (25, {"2": False, "3": True}, {"2": "2"}),
+             (35, {"2": False, "3": True}, {"2": "2"}), (90, {"2": True, "3": True}, {"2": "2"}))]
+    r3 = F.evaluate_link_cut(busy, "2", t_cut=20, t_restore=80)
+    assert r3["survived"], r3
+    assert r3["floors_kept_no_free_robot"] == ["f2"]
 
 
 def test_permanent_cut_and_status_gap():

@@ -24,6 +24,9 @@ class State:
 
     def __init__(self, outcomes: Sequence[str] = (), input_keys: Sequence[str] = (),
                  output_keys: Sequence[str] = (), io_keys: Sequence[str] = ()) -> None:
+        # None is accepted for any list (some programs pass it)
+        outcomes, input_keys, output_keys, io_keys = (outcomes or (), input_keys or (), output_keys or (),
+                                                      io_keys or ())
         self._outcomes: list[str] = unique_list(outcomes)
         self._input_keys: list[str] = unique_list(list(input_keys) + list(io_keys))
         self._output_keys: list[str] = unique_list(list(output_keys) + list(io_keys))

@@ -95,7 +95,7 @@ class ActionServerWrapper:
                 ud[field] = getattr(goal, field)
         ud[self._result_key] = self._action_spec().action_result.result
         if self._action_server.is_preempt_requested():
-            sc.request_preempt()
+            sc.request_preempt()  # (this thread holds no actionlib lock here)
         try:
             outcome = sc.execute(ud)
         except Exception:  # noqa: BLE001 - keep serving goals after a broken run
@@ -130,7 +130,13 @@ class ActionServerWrapper:
             self._action_server.set_aborted(result, "SMACH outcome: %s" % outcome)
 
     def preempt_cb(self) -> None:
-        """A cancel (or a newer goal) arrived: preempt the running container."""
+        """A cancel (or a newer goal) arrived: preempt the running container.
+
+        .. note:: actionlib calls this with its own locks held, and the container's transition
+           callbacks (feedback) need those locks while the container holds its transition lock; so the
+           preempt request is made from another thread, never from here (that would deadlock).
+        """
         if self.wrapped_container.is_running():
             rospy.logdebug("Preempt on action server wrapper %s" % self._server_name)
-            self.wrapped_container.request_preempt()
+            threading.Thread(target=self.wrapped_container.request_preempt, name="smach_wrapper_preempt",
+                             daemon=True).start()

@@ -17,6 +17,11 @@ import numpy as np
 
 from . import constants as C
 from .fires import GROUND, FireSet
+
+try:  # optional: only used for the final upsampling
+    import cv2 as _cv2
+except ImportError:  # pragma: no cover - the project's venv has OpenCV
+    _cv2 = None
 from .world import World
 
 SKY_BGR = (235, 206, 135)
@@ -132,29 +137,33 @@ class RGBDCamera:
                 & (ahead > C.CAM_DEPTH_MIN) & (ahead < C.CAM_DEPTH_MAX * 1.5)
                 & (np.abs(rel[:, :2] @ right) < ahead * math.tan(self.half_fov) + span))
         for i in np.nonzero(cand)[0]:
-            ctr, n, u = fires.pos[i], fires.normal[i], fires.u[i]
-            corners = ctr + np.array([[a * span * u[0], a * span * u[1], b * span] for a in (-1, 1) for b in (-1, 1)])
-            rect = self._pixel_rect(corners, cam, fwd, right)
-            if rect is None:
-                continue
-            v0, v1, u0, u1 = rect
-            dh = fwd[None, :] + self.xu[u0:u1, None] * right[None, :]          # (w, 2) column rays
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = ((ctr - cam) @ n) / (dh @ n[:2])                           # (w,) z-depth on the wall
-            a = (cam[:2] + dh * t[:, None] - ctr[:2]) @ u[:2]                  # (w,) along the wall
-            b = (cam[2] - ctr[2]) - self.kv[v0:v1, None] * t[None, :]        # (h, w) up the wall
-            blk_d = depth[v0:v1, u0:u1]                                        # uint16 mm
-            on_wall = np.abs(blk_d.astype(np.float32) - (1000.0 * t)[None, :]) < 150.0
-            if not on_wall.any():
-                continue
-            b2 = b * b
-            hole = on_wall & ((a * a)[None, :] + b2 < C.HOLE_RADIUS ** 2)
-            decoy = on_wall & ((((a - C.DECOY_OFFSET) ** 2)[None, :] + b2 < C.DECOY_RADIUS ** 2)
-                               | (((a + C.DECOY_OFFSET) ** 2)[None, :] + b2 < C.DECOY_RADIUS ** 2))
-            blk_c = bgr[v0:v1, u0:u1]
-            blk_c[decoy] = DECOY_BGR
-            blk_c[hole] = HOLE_BGR
-            blk_d[hole] = np.broadcast_to(_to_mm(t + HOLE_DEPTH_BEHIND)[None, :], hole.shape)[hole]
+            n, u = fires.normal[i], fires.u[i]
+            # three circles side by side: the hole in the middle, a decoy on each side; each is drawn in its
+            # own small image rectangle (a few thousand pixels) rather than one rectangle around all three
+            for off, rad, colour, is_hole in ((0.0, C.HOLE_RADIUS, HOLE_BGR, True),
+                                              (-C.DECOY_OFFSET, C.DECOY_RADIUS, DECOY_BGR, False),
+                                              (C.DECOY_OFFSET, C.DECOY_RADIUS, DECOY_BGR, False)):
+                ctr = fires.pos[i] + off * u
+                self._disc_on_wall(depth, bgr, cam, fwd, right, ctr, n, u, rad, colour, is_hole)
+
+    def _disc_on_wall(self, depth, bgr, cam, fwd, right, ctr, n, u, rad, colour, is_hole) -> None:
+        """Paint one disc of a vertical wall where that wall is the visible surface (hole: 0.3 m deeper)."""
+        corners = ctr + np.array([[a * rad * u[0], a * rad * u[1], b * rad] for a in (-1, 1) for b in (-1, 1)])
+        rect = self._pixel_rect(corners, cam, fwd, right)
+        if rect is None:
+            return
+        v0, v1, u0, u1 = rect
+        dh = fwd[None, :] + self.xu[u0:u1, None] * right[None, :]          # (w, 2) column rays
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((ctr - cam) @ n) / (dh @ n[:2])                           # (w,) z-depth on the wall
+        a = (cam[:2] + dh * t[:, None] - ctr[:2]) @ u[:2]                  # (w,) along the wall
+        b = (cam[2] - ctr[2]) - self.kv[v0:v1, None] * t[None, :]        # (h, w) up the wall
+        blk_d = depth[v0:v1, u0:u1]                                        # uint16 mm
+        disc = ((a * a)[None, :] + b * b < rad * rad) & (
+            np.abs(blk_d.astype(np.float32) - (1000.0 * t)[None, :]) < 150.0)
+        bgr[v0:v1, u0:u1][disc] = colour
+        if is_hole:
+            blk_d[disc] = np.broadcast_to(_to_mm(t + HOLE_DEPTH_BEHIND)[None, :], disc.shape)[disc]
 
     def _paint_ground_discs(self, depth, bgr, label, fires: FireSet, cam, fwd, right) -> None:
         """Red silk (or the blanket) on the ground: the ground depth depends on the row only."""
@@ -239,11 +248,10 @@ def _to_mm(z: np.ndarray) -> np.ndarray:
 
 
 def _upsample(img: np.ndarray, k: int) -> np.ndarray:
-    """Nearest-neighbour k x k upsampling in a single copy (broadcast, then reshape)."""
-    h, w = img.shape[:2]
-    rest = img.shape[2:]
-    big = np.broadcast_to(img.reshape(h, 1, w, 1, *rest), (h, k, w, k, *rest))
-    return big.reshape(h * k, w * k, *rest)
+    """Nearest-neighbour k x k upsampling (OpenCV when available: several times faster than NumPy here)."""
+    if _cv2 is not None:
+        return _cv2.resize(img, (img.shape[1] * k, img.shape[0] * k), interpolation=_cv2.INTER_NEAREST)
+    return np.repeat(np.repeat(img, k, axis=0), k, axis=1)
 
 
 class _Grid:

@@ -238,7 +238,7 @@ class ExtinguishFacadeFire(AgentTask):
     def _target(self, fire, ctl) -> tuple:
         """Body-frame aim point and where it comes from: hole > own fire detection > estimate."""
         p = self.agent.position()
-        holes = self.sensed.recent_holes(0.5)
+        holes = self.sensed.recent_holes(1.0)    # sim s: the circle detector runs at a few Hz on a busy CPU
         if holes:
             expected = world_to_body(fire - p[:3], p[3])
             middle = choose_hole(holes)

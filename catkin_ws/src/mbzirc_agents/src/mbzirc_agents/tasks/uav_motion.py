@@ -14,7 +14,7 @@ from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOf
 
 from .. import constants as C
 from ..framework import AgentTask, TaskError
-from ..geometry import column_box, plan_2d, swept_box
+from ..geometry import column_box, in_footprint, plan_2d, swept_box
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
@@ -120,6 +120,9 @@ class Land(AgentTask):
 class GoTo(AgentTask):
     """Fly to a waypoint: around tall buildings in legs; each leg through a reserved box.
 
+    A start or target inside a building footprint (indoor flight, windows) is flown straight: indoors
+    the caller's waypoints are the path.
+
     Args (task_args): straight (False): fly one straight leg (entering through a window).
     """
     INPUT_KEYS = ['waypoint']
@@ -130,7 +133,9 @@ class GoTo(AgentTask):
         if a.ual_state not in FLYING:
             raise TaskError('not flying: take off first')
         start = a.position()
-        legs = [tuple(target)] if self.args.get('straight') else self._legs(start[:3], target)
+        indoors = in_footprint(start, C.BUILDINGS) or in_footprint(target, C.BUILDINGS)
+        # indoors (or entering / leaving through a window) the caller's waypoints are the path
+        legs = [tuple(target)] if self.args.get('straight') or indoors else self._legs(start[:3], target)
         margin = float(a.p['region_margin'])
         for i, leg in enumerate(legs):
             here = a.position()
