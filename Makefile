@@ -27,7 +27,7 @@ test: setup
 # Separate from `make test`: it runs a whole mission (about 4 minutes at RTF 4 on an idle machine,
 # far longer on a loaded one) and needs root for ip netns.
 test-faults: setup
-	@mkdir -p results/robustness && source env.sh && for t in fuzz_project_nodes fuzz_mission_nodes; do \
+	@mkdir -p results/robustness && source env.sh && for t in fuzz_project_nodes fuzz_mission_nodes fuzz_ugv_recorder_nodes; do \
 	    echo "fuzzing every input of the nodes of $$t.test"; \
 	    unshare -n sh -c "ip link set lo up; exec rostest mbzirc_robustness $$t.test" \
 	      > results/robustness/$$t.log 2>&1 || echo "fuzz: $$t FAILED, see results/robustness/$$t.log"; done; \

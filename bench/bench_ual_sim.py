@@ -110,6 +110,7 @@ class Scenario:
             per_topic = {t: round(n / sim_s, 2) if sim_s > 0 else 0.0 for t, n in got.items()}
             rates = sorted(per_topic.values())
             return {"rtf": round(factor, 2), "window_wall_s": round(wall, 1), "topics": len(topics),
+                    "load_average_1min": round(os.getloadavg()[0], 1),
                     "min_rate_per_sim_s": rates[0] if rates else None,
                     "max_rate_per_sim_s": rates[-1] if rates else None}
         finally:

@@ -20,10 +20,10 @@ unit_dirs=()
 for p in "${PKGS[@]}"; do [ -d "$SRC/$p/test/unit" ] && unit_dirs+=("$SRC/$p/test/unit"); done
 if ((${#unit_dirs[@]})); then
   echo "=== unit tests: ${unit_dirs[*]#$ROOT/}"
-  python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$RESULTS/unit.xml" "${unit_dirs[@]}" \
+  python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$RESULTS/unit_$$.xml" "${unit_dirs[@]}" \
     2>&1 | tee "$RESULTS/unit.log"
   rc=${PIPESTATUS[0]}
-  n_pass=$(python - "$RESULTS/unit.xml" <<'PY'
+  n_pass=$(python - "$RESULTS/unit_$$.xml" <<'PY'
 import sys, xml.etree.ElementTree as ET
 r = ET.parse(sys.argv[1]).getroot(); s = r if r.tag == "testsuite" else r.find("testsuite")
 t, f, e, sk = (int(s.get(k, 0)) for k in ("tests", "failures", "errors", "skipped"))
@@ -48,9 +48,18 @@ for p in "${PKGS[@]}"; do
     timeout -k 10 "$ROSTEST_TIMEOUT" "${isolate[@]}" rostest --text "$p" "$(basename "$t")" \
       > "$RESULTS/${p}__$(basename "$t" .test).log" 2>&1
     rc=$?
+    log="$RESULTS/${p}__$(basename "$t" .test).log"
+    # rostest --text exits 0 even when test cases fail: judge from its summary (and a non-empty run).
+    sed 's/\x1b\[[0-9;]*m//g' "$log" | grep -q '^ \* RESULT: SUCCESS' || { [ $rc -eq 0 ] && rc=1; }
+    sed 's/\x1b\[[0-9;]*m//g' "$log" | grep -qE '^ \* TESTS: [1-9]' || { [ $rc -eq 0 ] && rc=1; }
     secs=$(( $(date +%s) - start ))
-    if [ $rc -eq 0 ]; then passed=$((passed + 1)); echo "    ok (${secs}s)"
-    else failed=$((failed + 1)); failures+=("$name"); echo "    FAILED rc=$rc (${secs}s), log:"
+    clean="$(sed 's/\x1b\[[0-9;]*m//g' "$log")"
+    n_tests=$(grep -oE '^ \* TESTS: [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | tail -1); n_tests=${n_tests:-0}
+    n_bad=$(grep -oE '^ \* (ERRORS|FAILURES): [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | awk '{s+=$1} END {print s+0}')
+    n_bad=${n_bad:-0}
+    if [ $rc -eq 0 ]; then passed=$((passed + n_tests)); echo "    ok: $n_tests test cases (${secs}s)"
+    else passed=$((passed + (n_tests > n_bad ? n_tests - n_bad : 0))); failed=$((failed + (n_bad > 0 ? n_bad : 1)))
+         failures+=("$name"); echo "    FAILED rc=$rc (${secs}s), log:"
          tail -60 "$RESULTS/${p}__$(basename "$t" .test).log" | sed 's/^/    | /'; fi
   done
 done

@@ -10,6 +10,7 @@ import threading
 import actionlib
 import rospy
 from mbzirc_comm_objs import msg as cmsg
+from mbzirc_comm_objs.srv import FreeRegions, FreeRegionsResponse
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "unit"))
 from fake_mission import FakeMission  # noqa: E402
@@ -59,7 +60,13 @@ class FakeAgents:
         self.feeds = {aid: rospy.Publisher(f"/{C.robot_ns(aid)}/data_feed", cmsg.AgentDataFeed, queue_size=1)
                       for aid in self.mission.agents}
         self.objects = rospy.Publisher("/estimated_objects", cmsg.ObjectList, queue_size=1)
+        self.freed: list[str] = []
+        self.free_srv = rospy.Service("/free_regions", FreeRegions, self._on_free)
         self.timer = rospy.Timer(rospy.Duration(0.1), self._publish)
+
+    def _on_free(self, req):
+        self.freed.append(req.agent_id)
+        return FreeRegionsResponse(success=True)
 
     def _make_cb(self, aid: str, task: str):
         def cb(goal) -> None:

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Integration test of the central unit node against fake agents: heartbeat, a complete mission,
-reassignment of a silent agent's floor and work for it on return, and a restart of the node mid-mission."""
+reassignment of a silent agent's floor and work for it on return, a restart of the node mid-mission, and
+a crashed UAV whose reserved regions are freed."""
 import json
 import os
 import sys
@@ -63,6 +64,16 @@ class TestCentralUnit(unittest.TestCase):
         self.assertTrue(wait_for(lambda: agents.mission.all_out(), deadline - rospy.get_time()),
                         f"not every fire out: {agents.mission.fires} / {status}")
         self.assertTrue(any(r[1] == "0" and r[2] == "search_indoor" for r in agents.received))
+
+        # UAV 3 (it flew) falls back to UNINITIALIZED, the simulator's crash state: its regions are freed
+        # and it gets no more goals.
+        self.assertEqual(agents.freed, [])
+        with agents.lock:
+            agents.mission.agents["3"].ual_state = 0
+        self.assertTrue(wait_for(lambda: "3" in agents.freed, 10.0), "the crashed UAV's regions were not freed")
+        t_crash = rospy.get_time()
+        rospy.sleep(2.0)
+        self.assertFalse([r for r in agents.received if r[1] == "3" and r[0] > t_crash])
 
 
 if __name__ == "__main__":

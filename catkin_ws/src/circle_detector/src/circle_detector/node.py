@@ -106,7 +106,11 @@ class CircleDetectorNode:
         except ValueError as err:
             rospy.logerr_throttle(THROTTLE_S, f"circle_detector: bad images: {err}")
             return
-        self.publish(color, circles, bgr)
+        try:
+            self.publish(color, circles, bgr)
+        except rospy.ROSException:  # publishers closed while shutting down
+            if not rospy.is_shutdown():
+                raise
 
     def publish(self, color: Image, circles: List[Circle], bgr: np.ndarray) -> None:
         stamp, frame = color.header.stamp, color.header.frame_id

@@ -50,19 +50,20 @@ def fit_plane(depth_m: np.ndarray, fx: float, fy: float, cx: float, cy: float,
     z = sub[ok]
     pts = np.stack([(uu[ok] - cx) * z / fx, (vv[ok] - cy) * z / fy, z], axis=1)
     rng = rng or np.random.default_rng(0)
-    best, best_count = None, 0
-    for _ in range(iterations):
-        a, b, c = pts[rng.choice(len(pts), 3, replace=False)]
-        n = np.cross(b - a, c - a)
-        norm = np.linalg.norm(n)
-        if norm < 1e-9:
-            continue
-        n = n / norm
-        count = int((np.abs((pts - a) @ n) < PLANE_INLIER_M).sum())
-        if count > best_count:
-            best, best_count = (n, a), count
-    if best is None or best_count < PLANE_MIN_INLIER_FRACTION * len(pts):
+    # every RANSAC hypothesis at once: (iterations, 3) normals from random point triples
+    tri = pts[rng.integers(0, len(pts), size=(iterations, 3))]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    norms = np.linalg.norm(normals, axis=1)
+    good = norms > 1e-9
+    if not good.any():
         return None
+    normals, anchors = normals[good] / norms[good, None], tri[good, 0]
+    offsets = np.einsum("ij,ij->i", normals, anchors)
+    counts = (np.abs(pts @ normals.T - offsets) < PLANE_INLIER_M).sum(axis=0)
+    k = int(np.argmax(counts))
+    if counts[k] < PLANE_MIN_INLIER_FRACTION * len(pts):
+        return None
+    best = (normals[k], anchors[k])
     inl = pts[np.abs((pts - best[1]) @ best[0]) < PLANE_INLIER_M]
     centre = inl.mean(axis=0)
     _, _, vt = np.linalg.svd(inl - centre, full_matrices=False)

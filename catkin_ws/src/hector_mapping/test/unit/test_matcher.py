@@ -67,3 +67,11 @@ def test_transform_helpers_are_consistent():
     assert compose(a, inverse(a)) == pytest.approx(np.zeros(3), abs=1e-12)
     p = np.array([[0.4, -0.2]])
     assert transform_points(compose(a, b), p) == pytest.approx(transform_points(a, transform_points(b, p)))
+
+
+def test_batched_residuals_equal_single_ones():
+    from hector_mapping.matcher import residuals
+    g = level_with_first_scan()
+    pts = points_at(START)
+    cands = np.array([[0.0, 0.0, 0.0], [0.1, -0.05, 0.02], [-0.2, 0.1, -0.3]])
+    assert residuals(g, pts, cands) == pytest.approx([residual(g, pts, c) for c in cands])

@@ -95,3 +95,20 @@ def test_rotation_search_widens_the_basin_for_a_sudden_turn():
         errors[search] = abs(wrap_angle(slam.process(scan1, np.zeros(2)).pose[2] - 0.3))
     assert errors[True] < 0.01
     assert errors[False] > errors[True]
+
+
+def test_recovery_search_catches_a_jump_out_of_the_basin():
+    """After a few good scans, a jump of (0.3 m, -0.3 m, 0.45 rad) between scans (as after dropped
+    scans) is far outside the Gauss-Newton basin; the recovery search finds it, the plain matcher not."""
+    base = (19.0, 11.0, 0.0)
+    jump = (19.3, 10.7, 0.45)
+    errors = {}
+    for recovery in (False, True):
+        slam = HectorSlam(SlamParams(**THESIS, use_motion_prediction=False, recovery_search=recovery))
+        for _ in range(4):
+            slam.process(pts(WORLD.raycast(*base)), np.zeros(2))
+        step = slam.process(pts(WORLD.raycast(*jump)), np.zeros(2))
+        errors[recovery] = (np.hypot(step.pose[0] - 0.3, step.pose[1] + 0.3), abs(step.pose[2] - 0.45))
+        assert slam.recoveries == (1 if recovery else 0)
+    assert errors[True][0] < 0.06 and errors[True][1] < 0.02
+    assert errors[False][1] > 0.1

@@ -44,7 +44,9 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'max_vertical_speed': 1.2,
     'tank_capacity': 2.0,
     'water_empty': 0.05,
-    'cruise_altitude': 0.0,            # 0: go home at the current altitude
+    'cruise_altitude': 3.0,            # go_home_and_refill climbs to at least this before flying home
+    'parked_half_size': 0.75,          # a landed UAV keeps the box (x, y +- this, z 0..parked_height)
+    'parked_height': 2.0,
     'refill_timeout': 60.0,
     'facade_standoff': C.FACADE_STANDOFF,
     'shoot_distance': 1.5,
@@ -86,6 +88,8 @@ class RobotAgent(Agent):
                                              float(self.p['return_home_timeout']))
         self._went_home = False
         self._home_request = None
+        self.parked = False                # a 'parked' region is held while landed
+        self._last_park_try = -1e9
         ifc = self.iface
         ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
         ifc.add_subscriber(None, 'ual/state', State, self._on_state)
@@ -104,6 +108,15 @@ class RobotAgent(Agent):
         self.pump_stop_srv = ifc.add_client('actuators_system/stop_pump', Trigger)
         ifc.add_service_server(None, 'get_cost_to_go_to', GetCostToGoTo, default_callback=self._on_cost)
         self.timer = backend.timer(1.0 / C.DATA_FEED_RATE_HZ, self._on_timer)
+
+    def start(self) -> None:
+        """Start the agent; drop regions a previous run of this agent (killed, respawned) left behind."""
+        super().start()
+        if self.p['use_regions']:
+            try:
+                self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, free_all=True))
+            except Exception:
+                pass        # no region manager yet: then it holds nothing of ours either
 
     # ---- sensing callbacks (always on) ------------------------------------------------------------
     def _on_pose(self, msg: PoseStamped) -> None:
@@ -374,6 +387,29 @@ class RobotAgent(Agent):
         if self.pumping or self.p['payload'] == 'water':
             self.stop_pump()
         self.hold()
+
+    def idle(self) -> None:
+        """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one."""
+        if self.ROBOT_TYPE != 'uav' or not self.p['use_regions'] or self.parked:
+            return
+        if self.ual_state not in (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED) or self.pose is None:
+            return
+        now = self.backend.now()
+        if now - self._last_park_try < 2.0:
+            return
+        self._last_park_try = now
+        p, h = self.position(), float(self.p['parked_half_size'])
+        req = AskForRegionRequest(agent_id=self.agent_id, label='parked')
+        req.min_corner = PointStamped()
+        req.max_corner = PointStamped()
+        req.min_corner.header.frame_id = req.max_corner.header.frame_id = C.GLOBAL_FRAME
+        req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z = p[0] - h, p[1] - h, self.arena[2]
+        req.max_corner.point.x, req.max_corner.point.y = p[0] + h, p[1] + h
+        req.max_corner.point.z = p[2] + float(self.p['parked_height'])
+        try:
+            self.parked = bool(self.ask_srv(req).success)
+        except Exception:
+            pass                                   # no region manager (yet): try again later
 
     def _on_cost(self, req: Any) -> GetCostToGoToResponse:
         """get_cost_to_go_to: metres to travel (-1 when the waypoint is invalid or unreachable)."""

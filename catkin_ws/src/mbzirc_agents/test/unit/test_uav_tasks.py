@@ -17,7 +17,7 @@ from mbzirc_agents.uav_agent import UavAgent
 def uav():
     be = FakeBackend()
     agent = UavAgent('2', be, {'region_timeout': 5.0})
-    ual = FakeUal(be)
+    ual = FakeUal(be, speedup=8.0)
     agent.start()
     deadline = time.monotonic() + 2
     while agent.pose is None and time.monotonic() < deadline:
@@ -56,7 +56,7 @@ def test_take_off_reserves_column_then_holds(uav):
     assert take_off(be) == 'succeeded'
     assert ual.state == 4 and ual.pos[2] == pytest.approx(3.0, abs=0.3)
     regions = ual.regions.regions()
-    assert ('2', 'hold') in regions and ('2', 'take_off') not in regions
+    assert ('2', 'hold') in regions and ('2', 'take_off') not in regions and ('2', 'parked') not in regions
 
 
 def test_take_off_bad_height(uav):
@@ -137,7 +137,12 @@ def test_land_frees_regions(uav):
     s = be.servers['land_action']
     s.send(LandGoal())
     assert s.wait(10) == 'succeeded'
-    assert ual.state == 1 and ual.regions.regions() == {}
+    assert ual.state == 1
+    time.sleep(0.5)
+    # only the parked box (no other UAV may fly low over a landed one) remains
+    assert set(ual.regions.regions()) == {('2', 'parked')}
+    lo, hi = ual.regions.regions()[('2', 'parked')]
+    assert lo[2] == 0.0 and hi[2] >= 2.0 and np.all(lo[:2] <= ual.pos[:2]) and np.all(hi[:2] >= ual.pos[:2])
 
 
 def test_data_feed_and_cost(uav):

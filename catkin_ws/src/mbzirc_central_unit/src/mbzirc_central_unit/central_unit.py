@@ -17,6 +17,7 @@ import yaml
 from actionlib_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs import msg as cmsg
+from mbzirc_comm_objs.srv import FreeRegions
 from std_msgs.msg import Header, String
 
 from . import constants as C
@@ -108,6 +109,7 @@ class CentralUnit:
         self.results: list[tuple[Command, int, dict]] = []
         self.feedback: dict[str, str] = {}
         self.silent: set[str] = set()
+        self.freed: set[str] = set()  # crashed agents whose reserved regions were freed
         self.heartbeat_pub = rospy.Publisher("/central_unit/heartbeat", Header, queue_size=1)
         self.status_pub = rospy.Publisher("/central_unit/status", String, queue_size=1, latch=True)
         self.subs = [rospy.Subscriber(f"/{C.robot_ns(i)}/data_feed", cmsg.AgentDataFeed, self._on_feed,
@@ -211,6 +213,17 @@ class CentralUnit:
         client.send_goal(goal, done_cb=done, feedback_cb=feedback)
         rospy.loginfo(f"central_unit: {cmd.agent_id} <- {cmd.describe()}")
 
+    def _free_regions_of(self, agent_id: str) -> None:
+        """A crashed robot lies where it fell and will never free its reserved boxes: free them, or the
+        other UAVs wait for them forever."""
+        try:
+            rospy.wait_for_service("/free_regions", timeout=0.2)
+            rospy.ServiceProxy("/free_regions", FreeRegions)(agent_id=agent_id, label="", free_all=True)
+            rospy.logwarn(f"central_unit: agent {agent_id} crashed: its work is reassigned, its regions freed")
+            self.freed.add(agent_id)
+        except (rospy.ROSException, rospy.ServiceException) as e:
+            rospy.logerr_throttle(10.0, f"central_unit: cannot free the regions of crashed {agent_id}: {e}")
+
     # ---- the loop --------------------------------------------------------------------------------
     def _tick(self, _event: Any) -> None:
         try:
@@ -253,6 +266,8 @@ class CentralUnit:
                 self.silent.discard(agent_id)
         for cmd in self.strategy.decide(world):
             self._send(cmd)
+        for agent_id in sorted(self.strategy.crashed - self.freed):
+            self._free_regions_of(agent_id)
         self._publish_status(world)
 
     def _publish_status(self, world: WorldView) -> None:

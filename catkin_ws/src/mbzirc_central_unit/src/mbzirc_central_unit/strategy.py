@@ -84,6 +84,8 @@ class Strategy:
         # Fire ids a search just reported, not yet in /estimated_objects: the agent waits a few ticks.
         self.pending_ids: dict[str, tuple[set[int], int]] = {}
         self.consecutive_failures: Counter[str] = Counter()
+        self.seen_flying: set[str] = set()
+        self.crashed: set[str] = set()  # robots seen moving, now UNINITIALIZED: the simulator's crash state
 
     # ---- bookkeeping -----------------------------------------------------------------------------
     def altitude(self, agent_id: str) -> float:
@@ -147,8 +149,21 @@ class Strategy:
     def broken(self, agent_id: str) -> bool:
         """An agent that cannot take off any more, or failed every task of a long row (a crashed robot
         still publishes its data_feed): it gets no more work, and owns nothing."""
-        return (self.failures[(agent_id, C.TAKE_OFF, None)] >= self.p.max_failures
+        return (agent_id in self.crashed
+                or self.failures[(agent_id, C.TAKE_OFF, None)] >= self.p.max_failures
                 or self.consecutive_failures[agent_id] >= 2 * self.p.max_failures)
+
+    def _note_crashes(self, world: WorldView) -> None:
+        """A robot that moved (UAV flying, UGV driving: FLYING_AUTO) and is UNINITIALIZED again has crashed
+        (it lies where it fell, deaf)."""
+        for a in world.agents.values():
+            if a.ual_state in (C.UAL_TAKING_OFF, C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL):
+                self.seen_flying.add(a.agent_id)
+            elif a.ual_state == C.UAL_UNINITIALIZED and a.agent_id in self.seen_flying \
+                    and a.agent_id not in self.crashed and a.alive(world.now, self.p.agent_timeout):
+                self.crashed.add(a.agent_id)
+                self.in_flight.pop(a.agent_id, None)
+                self.release(a.agent_id)
 
     def forget(self, cmd: Command) -> None:
         """A command that could not be sent (no action server yet): not in flight, not a failure."""
@@ -175,11 +190,9 @@ class Strategy:
         a = world.agents.get(owner) if owner is not None else None
         return a is not None and a.alive(world.now, self.p.agent_timeout) and not self.broken(owner)
 
-    def _free_for(self, d: dict[int, str], floor: int, agent_id: str, world: WorldView) -> bool:
+    def _free_for(self, floor: int, agent_id: str, world: WorldView) -> bool:
         """True if no other alive UAV works at that floor, outside or inside: one UAV per floor altitude
-        keeps a facade search and a window entry of the same floor from meeting. `d` is kept for clarity
-        of the call sites; both maps are checked."""
-        del d
+        keeps a facade search and a window entry of the same floor from meeting."""
         for owners in (self.floor_owner, self.indoor_owner):
             owner = owners.get(floor)
             if owner is not None and owner != agent_id and self._owner_alive(owner, world):
@@ -206,6 +219,7 @@ class Strategy:
         """Commands for every alive, idle agent without a goal in flight. Each returned command counts as
         in flight; the caller calls `on_result` when it ends, or `on_result(cmd, False)` / `forget` if it
         could not be sent."""
+        self._note_crashes(world)
         self._rebuild_ownership(world)
         out: list[Command] = []
         for agent_id in sorted(world.agents):
@@ -349,14 +363,14 @@ class Strategy:
         mine = [f for f in world.fires_of(C.KIND_FACADE)
                 if self.floor_owner.get(f.floor) == aid and self._fire_ok(a, f)]
         free = [f for f in world.fires_of(C.KIND_FACADE)
-                if self._free_for(self.floor_owner, f.floor, aid, world) and self._fire_ok(a, f)]
+                if self._free_for(f.floor, aid, world) and self._fire_ok(a, f)]
         for group in (mine, free):
             if group:
                 f = self._nearest(a, group)
                 return (C.KIND_FACADE, f.floor, f)
         # 2. an indoor fire already known on a floor I own or nobody owns.
         indoor = [f for f in world.fires_of(C.KIND_INDOOR) if f.floor in self._uav_indoor_floors(world)
-                  and self._free_for(self.indoor_owner, f.floor, aid, world) and self._fire_ok(a, f)
+                  and self._free_for(f.floor, aid, world) and self._fire_ok(a, f)
                   and self.p.layout.room_for(f.floor, f.position) is not None]
         if indoor:
             f = self._nearest(a, indoor)
@@ -373,7 +387,7 @@ class Strategy:
             is_indoor = group is indoor_floors
             owner_map = self.indoor_owner if is_indoor else self.floor_owner
             kind = C.KIND_INDOOR if is_indoor else C.KIND_FACADE
-            candidates = [f for f in group if self._free_for(owner_map, f, aid, world)
+            candidates = [f for f in group if self._free_for(f, aid, world)
                           and (is_indoor or self._ok(a, C.SEARCH_FACADE, f))
                           and self._ok(a, C.FOLLOW_PATH, ("transit", f))]
             if not candidates:

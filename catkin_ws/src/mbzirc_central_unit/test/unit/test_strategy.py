@@ -286,3 +286,28 @@ def test_exit_from_the_building_is_one_straight_waypoint_at_a_time():
     a.x, a.y, a.z = room.inner
     cmd = s.decide(WorldView(1.0, {"2": a}, {}))[0]
     assert cmd.task == C.SEARCH_INDOOR and math.dist(cmd.goal["path"][0][:3], room.entry[:3]) < 1e-6
+
+
+def test_a_uav_that_flew_and_is_uninitialized_again_has_crashed():
+    m = FakeMission()
+    m.step(); m.step()
+    floor = [f for f, o in m.strategy.floor_owner.items() if o == "2"][0]
+    m.agents["2"].ual_state = C.UAL_UNINITIALIZED   # the simulator's crash state
+    m.step()
+    assert "2" in m.strategy.crashed and m.strategy.broken("2")
+    assert m.strategy.floor_owner.get(floor) != "2"
+    # never flown, UNINITIALIZED at start-up: not a crash
+    m2 = FakeMission()
+    m2.agents["3"].ual_state = C.UAL_UNINITIALIZED
+    m2.step()
+    assert not m2.strategy.crashed
+
+
+def test_a_crashed_ugv_gets_no_more_goals():
+    m = FakeMission()
+    m.agents["0"].ual_state = C.UAL_FLYING_AUTO   # driving
+    m.strategy.decide(m.world())
+    m.agents["0"].ual_state = C.UAL_UNINITIALIZED
+    m.strategy.in_flight.clear()
+    cmds = m.strategy.decide(m.world())
+    assert "0" in m.strategy.crashed and all(c.agent_id != "0" for c in cmds)

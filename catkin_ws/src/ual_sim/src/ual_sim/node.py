@@ -355,7 +355,7 @@ class SimNode:
             "thermal_rate": float(g("~thermal_rate", C.THERMAL_RATE)), "rgbd": bool(g("~rgbd", True)),
             "rgbd_rate": float(g("~rgbd_rate", C.CAM_RATE)), "pose_noise": float(g("~pose_noise", 0.0)),
             "wind": bool(g("~wind", True)), "tf_odom": bool(g("~tf_odom", False)),
-            "markers": bool(g("~markers", True)), "report_cpu": bool(g("~report_cpu", True)),
+            "markers": bool(g("~markers", True)),
         }
         prm = self.params
         if not (prm["sim_rate"] > 0 and math.isfinite(prm["sim_rate"])):
@@ -370,6 +370,7 @@ class SimNode:
             rospy.logerr(f"[ual_sim] {e}. Falling back to the default world.")
             world = load_world(None, n_uavs=prm["uavs"], ugv=prm["ugv"])
         self.sim = Simulation(world, prm["seed"], prm["pose_noise"], prm["wind"])
+        self.own_clock = self._stop_listening_to_own_clock()
         self.cpu: dict[str, list[float]] = {}
         self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=Q)
         self.pub_tf = rospy.Publisher("/tf", TFMessage, queue_size=Q)
@@ -391,6 +392,24 @@ class SimNode:
                       f"{[f.holder.id for f in self.sim.fires.active()]}, rtf {prm['rtf']}")
 
     # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _stop_listening_to_own_clock() -> bool:
+        """With /use_sim_time rospy subscribes this node to /clock, i.e. to itself: hundreds of messages a
+        second to deserialize for nothing. Drop that subscription and set rospy's time directly instead
+        (private rospy API; if it is not there, the subscription simply stays)."""
+        try:
+            from rospy.impl import simtime
+            from rospy import rostime
+            sub = getattr(simtime, "_clock_sub", None)
+            if sub is None or not hasattr(rostime, "_set_rostime"):
+                return False
+            sub.unregister()
+            simtime._clock_sub = None
+            return True
+        except Exception as e:  # noqa: BLE001 - any failure only costs performance
+            rospy.logwarn(f"[ual_sim] keeping the /clock self-subscription: {e}")
+            return False
+
     def timed(self, name: str, fn: Callable[[], None]) -> None:
         """Run fn and account its CPU time per sensor frame (reported in the log and by the benchmark)."""
         t0 = time.thread_time()
@@ -429,6 +448,8 @@ class SimNode:
                 now = self.sim.time
                 stamp = rospy.Time.from_sec(now)
                 self.pub_clock.publish(Clock(stamp))
+                if self.own_clock:
+                    rospy.rostime._set_rostime(stamp)
                 tfs = [tf for io in self.io.values() if (tf := io.publish(now, stamp)) is not None]
                 if tfs and self.pub_tf.get_num_connections():
                     self.pub_tf.publish(TFMessage(tfs))

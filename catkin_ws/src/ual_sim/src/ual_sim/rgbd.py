@@ -20,6 +20,7 @@ from .fires import GROUND, FireSet
 
 try:  # optional: only used for the final upsampling
     import cv2 as _cv2
+    _cv2.setNumThreads(1)   # a 2-core machine shared by many nodes: no OpenCV worker threads
 except ImportError:  # pragma: no cover - the project's venv has OpenCV
     _cv2 = None
 from .world import World

@@ -48,17 +48,17 @@ def test_laser_sees_building_at_right_range(world):
     # 3 m west of facade C (x = 11.4) at z = 6 facing east: front beam 3 m, rear beam nothing in range
     r = world.laser_scan(8.4, 9.5, 6.0, 0.0)
     assert len(r) == C.LASER_BEAMS
-    assert r[C.LASER_BEAMS // 2] == pytest.approx(3.0, abs=1e-6)
+    assert r[C.LASER_BEAMS // 2] == pytest.approx(3.0, abs=1e-4)
     assert math.isinf(r[0])
     # facing north (yaw pi/2) from inside the tower ground floor: interior wall y = 15.0 at 5 m
     r = world.laser_scan(12.0, 10.0, 3.0, math.pi / 2)
-    assert r[C.LASER_BEAMS // 2] == pytest.approx(5.0, abs=1e-6)
+    assert r[C.LASER_BEAMS // 2] == pytest.approx(5.0, abs=1e-4)
 
 
 def test_window_is_open_to_laser(world):
     # first-floor window of facade C at y 11.5-13.5, z 6.5-8.5: the beam goes in and meets the interior wall x=17.7
     r = world.laser_scan(8.4, 12.5, 7.5, 0.0)
-    assert r[C.LASER_BEAMS // 2] == pytest.approx(17.7 - 8.4, abs=1e-6)
+    assert r[C.LASER_BEAMS // 2] == pytest.approx(17.7 - 8.4, abs=1e-4)
 
 
 def test_raycast_ground_and_sky(world):

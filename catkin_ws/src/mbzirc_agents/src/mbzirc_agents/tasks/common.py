@@ -58,6 +58,10 @@ def floor_of(z: float) -> int:
 
 
 def fire_position(agent: Any, fire_id: int) -> Tuple[float, float, float]:
-    """Current estimate of a fire's position (raises ValueError when the fire vanished)."""
-    p = agent.fire(fire_id).pose.pose.position
+    """Current estimate of a fire's position (TaskError when the fire vanished from the estimator)."""
+    from ..framework import TaskError
+    try:
+        p = agent.fire(fire_id).pose.pose.position
+    except ValueError as e:
+        raise TaskError(str(e))
     return float(p.x), float(p.y), float(p.z)

@@ -88,6 +88,8 @@ class TakeOff(AgentTask):
                       ud.height / 0.5 + 20.0, 'the take-off to finish')
         a.reserve(self, 'hold', hold_box(a, a.position()))
         a.free('take_off')
+        a.free('parked')
+        a.parked = False
         self.result['message'] = f'flying at z {a.position()[2]:.1f}'
         return C.SUCCESS
 
@@ -113,6 +115,7 @@ class Land(AgentTask):
             raise TaskError(f'ual/land failed: {e}')
         self.wait_for(lambda: a.ual_state in LANDED, p[2] / 0.4 + 20.0, 'the landing to finish')
         a.free(free_all=True)
+        a.parked = False                  # idle() parks it again where it landed
         self.result['message'] = 'landed'
         return C.SUCCESS
 
@@ -195,12 +198,19 @@ class GoHomeAndRefill(AgentTask):
         if home is None:
             raise TaskError('home unknown (no pose yet)')
         if a.ual_state in FLYING:
-            z = max(a.position()[2], float(a.p['cruise_altitude']))
+            p = a.position()
+            z = max(p[2], float(a.p['cruise_altitude']))
+            if p[2] < z - 0.2:                    # climb on the spot first: low flight meets parked UAVs
+                self.feedback('CLIMBING', f'climbing to the cruise altitude {z:.1f}')
+                if self.call_task('go_to', {'waypoint': ((p[0], p[1], z), None)}) != C.SUCCESS:
+                    raise TaskError(f'climbing: {self.last_sub_result.get("message")}')
             self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
             if self.call_task('go_to', {'waypoint': ((home[0], home[1], z), None)}) != C.SUCCESS:
                 raise TaskError(f'going home: {self.last_sub_result.get("message")}')
             if self.call_task('land', {}) != C.SUCCESS:
                 raise TaskError(f'landing: {self.last_sub_result.get("message")}')
+        elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > 1.5:
+            raise TaskError('landed away from home: take off first')
         self.feedback('REFILLING', 'waiting for the reset (water / blanket)')
         if a.p['payload'] == 'water':
             full = 0.95 * float(a.p['tank_capacity'])
