@@ -95,7 +95,10 @@ class Scenario:
                 subs.append(rospy.Subscriber(t, typ, cb, queue_size=10, buff_size=1 << 24))
             rtfs = []
             sub_rtf = rospy.Subscriber("/sim/rtf", Float32, lambda m: rtfs.append(m.data), queue_size=10)
-            time.sleep(3.0)  # connections up, steady state
+            deadline = time.time() + 30.0   # every connection up (slow on a loaded machine), then steady state
+            while time.time() < deadline and not all(counts.values()):
+                time.sleep(0.2)
+            time.sleep(2.0)
             rtfs.clear()
             for t in counts:
                 counts[t] = 0
@@ -112,6 +115,7 @@ class Scenario:
             return {"rtf": round(factor, 2), "window_wall_s": round(wall, 1), "topics": len(topics),
                     "load_average_1min": round(os.getloadavg()[0], 1),
                     "min_rate_per_sim_s": rates[0] if rates else None,
+                    "slowest_topic": min(per_topic, key=per_topic.get) if per_topic else None,
                     "max_rate_per_sim_s": rates[-1] if rates else None}
         finally:
             node.terminate()

@@ -43,8 +43,8 @@ class ReplayTest(unittest.TestCase):
         cls.est = {}
         cls.truth = {}
         cls.cov = []
-        rospy.Subscriber("slam_out_pose", PoseStamped, cls._on_pose, queue_size=100)
-        rospy.Subscriber("ground_truth/pose", PoseStamped, cls._on_truth, queue_size=100)
+        rospy.Subscriber("slam_out_pose", PoseStamped, cls._on_pose, queue_size=1000)
+        rospy.Subscriber("ground_truth/pose", PoseStamped, cls._on_truth, queue_size=1000)
         rospy.Subscriber("poseupdate", PoseWithCovarianceStamped,
                          lambda m: cls.cov.append(np.array(m.pose.covariance).reshape(6, 6)), queue_size=100)
         cls.tf_buffer = tf2_ros.Buffer()

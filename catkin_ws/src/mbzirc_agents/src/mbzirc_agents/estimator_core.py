@@ -7,8 +7,8 @@ with each associated detection by an information-filter update.
 Association: a detection goes to the track of its type with the smallest Mahalanobis distance
 (innovation covariance = track + detection covariance) under the chi-square gate `chi2_gate` (99.9 % for
 3 dof) and within the Euclidean cap `gate` (m) of the type; two tracks of a type that come within that
-gate of each other (with a detection's default covariance added, so that two overconfident tracks still
-meet), or closer than `merge_distance` of the type, are merged (the older id survives). Why both: with only a Euclidean gate, noise tails start duplicate
+gate of each other (their covariances floored at `min_std`), or closer than `merge_distance` of the type,
+are merged (the older id survives). Why both: with only a Euclidean gate, noise tails start duplicate
 tracks that then grow on their own (bench_agents: 25 duplicates of 8 fires at 0.7 m noise).
 
 Track life:
@@ -21,7 +21,6 @@ Track life:
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
 
@@ -71,6 +70,12 @@ def classify_fire(position: Sequence[float], buildings: Sequence[Sequence[float]
     return C.SUBTYPE_FACADE
 
 
+def floor_covariance(cov: np.ndarray, min_var: float) -> np.ndarray:
+    """cov with every eigenvalue raised to at least min_var (symmetric 3x3)."""
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    return (v * np.maximum(w, min_var)) @ v.T
+
+
 def sane_covariance(cov: np.ndarray, default: np.ndarray) -> np.ndarray:
     """cov when it is a finite, symmetric positive-definite 3x3 matrix, else default."""
     try:
@@ -90,6 +95,9 @@ class ObjectEstimator:
     Args:
         gates: Euclidean cap (m) of the association per object type; other types use `default_gate`.
         chi2_gate: Mahalanobis gate (squared, 3 dof; 16.27 = 99.9 %).
+        min_std: floor (m) of a track's standard deviation in the gates (not in the estimate): detections
+            from different viewpoints are biased differently, so a static track must not look more
+            certain than this when deciding what belongs to it (else two tracks of one object never merge).
         merge_distances: per type, tracks closer than this are one object (fire holders are >= 2.9 m apart),
             whatever their covariances say (a static model grows overconfident).
         min_updates: updates before a track is confirmed (ACTIVE).
@@ -103,7 +111,8 @@ class ObjectEstimator:
                  min_updates: int = 5, lost_time: float = 10.0,
                  default_covariance: Sequence[float] = (1.5, 1.5, 0.5), process_noise: float = 1e-3,
                  buildings: Sequence[Sequence[float]] = tuple(C.BUILDINGS), chi2_gate: float = 16.27,
-                 merge_distances: Optional[Dict[int, float]] = None) -> None:
+                 merge_distances: Optional[Dict[int, float]] = None, min_std: float = 0.4) -> None:
+        self.min_var = float(min_std) ** 2
         self.merge_distances = dict(merge_distances or {C.TYPE_FIRE: 1.5, C.TYPE_HOLE: 0.15})
         self.gates = dict(gates or {C.TYPE_FIRE: 5.0, C.TYPE_HOLE: 0.4})
         self.chi2_gate = float(chi2_gate)
@@ -158,7 +167,7 @@ class ObjectEstimator:
             if float(np.linalg.norm(e)) > cap:
                 continue
             try:
-                d2 = float(e @ np.linalg.solve(t.covariance + r, e))
+                d2 = float(e @ np.linalg.solve(floor_covariance(t.covariance, self.min_var) + r, e))
             except np.linalg.LinAlgError:
                 continue
             if d2 <= best_d2:
@@ -171,8 +180,8 @@ class ObjectEstimator:
 
     def _merge_near(self, track: Track) -> Track:
         """Merge track into another track of its type inside the gates (the older one survives)."""
-        # the gate as if the other track were a fresh detection: a confident track must not keep a twin
-        other = self._gated(track.type, track.position, track.covariance + self.default_cov, exclude=track.id)
+        other = self._gated(track.type, track.position, floor_covariance(track.covariance, self.min_var),
+                            exclude=track.id)
         if other is None:
             md = self.merge_distances.get(track.type, 0.0)
             near = [t for t in self.tracks.values() if t.type == track.type and t.id != track.id

@@ -6,7 +6,7 @@ from typing import Any, Dict
 from mbzirc_comm_objs import msg as M
 
 from .robot_agent import RobotAgent
-from .tasks import indoor, uav_fires as F, uav_motion as U
+from .tasks import facade as F, ground as G, indoor, uav_motion as U
 
 # name, task class, action name (mbzirc_comm_objs.msg.<X>Action), gen_userdata, sub-tasks
 UAV_TASKS = [
@@ -18,8 +18,8 @@ UAV_TASKS = [
     ('search_facade', F.SearchFacade, 'SearchFacade', F.gen_search_facade, ['go_to']),
     ('go_to_facade_fire', F.GoToFacadeFire, 'GoToFacadeFire', F.gen_facade_fire, ['go_to']),
     ('extinguish_facade_fire', F.ExtinguishFacadeFire, 'ExtinguishFacadeFire', F.gen_facade_fire, ['go_to']),
-    ('look_for_ground_fires', F.LookForGroundFires, 'LookForGroundFires', F.gen_look_for_ground_fires, []),
-    ('extinguish_ground_fire', F.ExtinguishGroundFire, 'ExtinguishGroundFire', F.gen_ground_fire, ['go_to']),
+    ('look_for_ground_fires', G.LookForGroundFires, 'LookForGroundFires', G.gen_look_for_ground_fires, []),
+    ('extinguish_ground_fire', G.ExtinguishGroundFire, 'ExtinguishGroundFire', G.gen_ground_fire, ['go_to']),
     ('enter_building', indoor.EnterBuilding, 'EnterBuilding', indoor.gen_enter_building, ['go_to', 'move']),
     ('search_indoor', indoor.SearchIndoor, 'SearchIndoor', indoor.gen_search_indoor_uav, ['move']),
     ('extinguish_indoor_fire', indoor.ExtinguishIndoorFire, 'ExtinguishIndoorFire', indoor.gen_indoor_fire,

@@ -1,6 +1,5 @@
 """Agent framework with a fake backend: dispatch, busy rejection, preemption, sub-tasks, bad goals."""
 import math
-import threading
 import time
 from types import SimpleNamespace
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 import threading
-from typing import Any, Optional
+from typing import Any
 
 import actionlib
 import rospy

@@ -74,13 +74,6 @@ FACADE_HOLDERS = (
     (24.2, 17.75, 6.0), (24.2, 12.7, 10.5), (24.2, 8.2, 12.5), (24.2, 18.8, 12.5), (24.2, 8.2, 8.25),
 )
 GROUND_FIRE_CANDIDATES = ((-9.0, 20.0, 0.0), (1.0, 14.0, 0.0))
-# Indoor entries: floor 0 through a door (UGV), floors 1-2 through windows (UAVs), as
-# (x, y, z, yaw) of the pose in front of the opening, looking in.
-INDOOR_ENTRIES = {
-    0: (9.4, 12.0, 0.0, 0.0),
-    1: (9.0, 13.0, 7.5, 0.0),
-    2: (9.0, 13.0, 12.5, 0.0),
-}
 # Open area where a second ground search sweeps (xmin, ymin, xmax, ymax) and its sweep spacing.
 GROUND_SEARCH_AREA = (-14.0, 6.0, 6.5, 29.0)  # keeps clear of the home (take-off) area
 

@@ -31,6 +31,7 @@ from .world_model import AgentView, FireView, WorldView
 
 # The blanket UAV's searches in turn: the known outdoor holders (quick), then a sweep of the open area.
 GROUND_SEARCH_PLAN = ("holders", "holders", "sweep", "holders", "sweep")
+PLAUSIBLE_RADIUS = 2.0  # m from a holder of the layout for a facade / indoor fire track to be a target
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
 
@@ -556,7 +557,20 @@ class Strategy:
         """False once this agent failed this task on this target too often."""
         return self.failures[(a.agent_id, task, target)] < self.p.max_failures
 
+    def _plausible(self, f: FireView) -> bool:
+        """A facade / indoor fire track within PLAUSIBLE_RADIUS of a holder of the layout. A track far from
+        every holder is a stray or drifted estimate; sending a UAV to aim at it leads it into the wall."""
+        layout = self.p.layout
+        if f.kind == C.KIND_FACADE:
+            holders = layout.facade_holders
+        elif f.kind == C.KIND_INDOOR:
+            holders = [h[:3] for h in layout.indoor_holders]
+        else:
+            return True
+        return any(math.dist(f.position, h[:3]) <= PLAUSIBLE_RADIUS for h in holders)
+
     def _fire_ok(self, a: AgentView, f: FireView) -> bool:
         tasks = (C.GO_TO_FACADE_FIRE, C.EXTINGUISH_FACADE_FIRE) if f.kind == C.KIND_FACADE \
             else (C.EXTINGUISH_INDOOR_FIRE,)
-        return all(self._ok(a, t, f.fire_id) for t in tasks) and self._ok(a, C.FOLLOW_PATH, ("transit", f.floor))
+        return all(self._ok(a, t, f.fire_id) for t in tasks) and self._ok(a, C.FOLLOW_PATH, ("transit", f.floor)) \
+            and self._plausible(f)

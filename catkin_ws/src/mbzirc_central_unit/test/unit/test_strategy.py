@@ -311,3 +311,16 @@ def test_a_crashed_ugv_gets_no_more_goals():
     m.strategy.in_flight.clear()
     cmds = m.strategy.decide(m.world())
     assert "0" in m.strategy.crashed and all(c.agent_id != "0" for c in cmds)
+
+
+def test_fire_tracks_far_from_every_holder_are_not_targets():
+    s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 30.0, 25.0, 6.0, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    drifted = FireView(9, 24.2, 12.0, 6.0, C.KIND_FACADE)   # 4.5 m from the nearest floor-1 holder on D
+    cmds = s.decide(WorldView(0.0, {"2": a}, {9: drifted}))
+    assert cmds and all("fire 9" not in c.reason and c.goal.get("fire_id") != 9 for c in cmds)
+    near = FireView(9, 24.3, 17.5, 6.1, C.KIND_FACADE)      # D_0 (24.2, 17.75, 6.0)
+    s2 = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
+    cmd = s2.decide(WorldView(0.0, {"2": a}, {9: near}))[0]
+    assert cmd.target == ("transit", 1) and "fire 9" in cmd.reason

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import glob
+from datetime import datetime, timedelta
 import json
 import os
 import shutil
@@ -113,8 +114,8 @@ class FaultSuite:
         self.lab: Optional[NetnsLab] = None
 
     def say(self, text: str) -> None:
-        """One line of progress (printed and kept for the report)."""
-        line = f"[faults] {text}"
+        """One line of progress, wall-clock stamped (printed and kept for the report)."""
+        line = f"[faults] {datetime.now():%H:%M:%S} {text}"
         print(line, flush=True)
         self.log.append(line)
 
@@ -227,7 +228,7 @@ class FaultSuite:
     def _cut(self, f: F.Fault, now: float) -> None:
         host = "ugv" if f.target == "0" else f"uav{f.target}"
         self.lab.set_link(host, False)
-        f.result = {"t_cut": now}
+        f.result = {"t_cut": now, "wall_cut": datetime.now().isoformat(timespec="seconds")}
         self.say(f"link of {host} cut" + (f" for {f.duration_s:.0f} s" if f.duration_s else " for good"))
 
     # ---- main ----------------------------------------------------------------------------------
@@ -267,6 +268,7 @@ class FaultSuite:
             if f.kind in (F.KIND_LINK_CUT, F.KIND_LINK_CUT_PERMANENT) and "t_cut" in f.result:
                 t_restore = f.result.get("t_restore")
                 f.result.update(F.evaluate_link_cut(history, f.target, f.result["t_cut"], t_restore))
+                f.result["agent_log_during_cut"] = self._agent_log(f)
         rep = robustness_report(fuzz, [F.scenario_entry(f) for f in self.cfg.schedule], summary,
                                 robots_lost=F.robots_lost(history))
         rep["error"] = error
@@ -275,6 +277,19 @@ class FaultSuite:
         write_json(self.cfg.report_path, rep)
         print(format_robustness(rep), flush=True)
         return rep
+
+    def _agent_log(self, f: F.Fault) -> dict[str, Any]:
+        """The cut robot's own agent log while it was cut (plus 10 s), from its host's ROS log dir."""
+        host = "ugv" if f.target == "0" else f"uav{f.target}"
+        start = datetime.fromisoformat(f.result["wall_cut"])
+        end = datetime.fromisoformat(f.result.get("wall_restore") or datetime.now().isoformat()) + timedelta(seconds=10)
+        lines: list[str] = []
+        for path in glob.glob(os.path.join(self.out, "logs", host, "*", f"mbzirc2020_{f.target}-agent*.log")):
+            if "latest" in path or path.endswith("-stdout.log"):
+                continue
+            with open(path, encoding="utf-8", errors="replace") as fh:
+                lines += fh.readlines()
+        return F.agent_log_window(lines, start, end)
 
     def gs_proc_running(self) -> bool:
         return getattr(self, "gs_proc", None) is not None and self.gs_proc.poll() is None
@@ -302,6 +317,7 @@ class FaultSuite:
                     host = "ugv" if f.target == "0" else f"uav{f.target}"
                     self.lab.set_link(host, True)
                     f.result["t_restore"] = mon.sim_time()
+                    f.result["wall_restore"] = datetime.now().isoformat(timespec="seconds")
                     self.say(f"link of {host} restored")
                     restores.remove((t_restore, f))
             if time.monotonic() > wall_limit:

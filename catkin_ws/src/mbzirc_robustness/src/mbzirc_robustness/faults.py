@@ -7,8 +7,12 @@ tested without running a mission.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from datetime import datetime
+from typing import Any, Iterable, Optional
+
+ROSOUT_LINE = re.compile(r"^\[rosout\]\[(\w+)\] (\d{4}-\d\d-\d\d \d\d:\d\d:\d\d),(\d+): (.*)$")
 
 KIND_LINK_CUT = "link_cut"
 KIND_LINK_CUT_PERMANENT = "link_cut_permanent"
@@ -165,3 +169,22 @@ def scenario_entry(f: Fault) -> dict[str, Any]:
         entry["duration_s"] = f.duration_s
     entry.update({k: v for k, v in f.result.items() if k not in entry})
     return entry
+
+
+def agent_log_window(lines: Iterable[str], start: datetime, end: datetime, keep: int = 4) -> dict[str, Any]:
+    """What a robot's agent logged (its rospy log file, ``[rosout]`` lines) between ``start`` and ``end``.
+
+    Why: a cut robot cannot be heard from the ground station; its own log says whether it noticed the
+    heartbeat loss and what it did (stop, hold, return home) - or that it was stuck and said nothing.
+    """
+    inside: list[str] = []
+    for line in lines:
+        m = ROSOUT_LINE.match(line.rstrip("\n"))
+        if not m:
+            continue
+        t = datetime.strptime(m.group(2), "%Y-%m-%d %H:%M:%S").replace(microsecond=int(m.group(3)) * 1000)
+        if start <= t <= end:
+            inside.append(f"{m.group(2)[11:]} {m.group(1)}: {m.group(4)[:160]}")
+    hb = [x for x in inside if "heartbeat" in x.lower()]
+    return {"lines": len(inside), "heartbeat_lines": hb[:keep], "first": inside[:keep], "last": inside[-keep:],
+            "noticed_heartbeat_loss": bool(hb)}

@@ -188,6 +188,8 @@ def robustness_report(fuzz: dict[str, Any] | None, scenarios: list[dict[str, Any
         out["fires_total"] = mission.get("fires_total")
         out["collisions"] = mission.get("crashes")
         out["mission"] = {k: mission.get(k) for k in ("score", "sim_time_s", "wall_time_s", "real_time_factor")}
+        if mission.get("crashes"):
+            out["failures"].append(f"collisions during the mission: {mission['crashes']}")
     return out
 
 
@@ -201,5 +203,12 @@ def format_robustness(rep: dict[str, Any]) -> str:
         f"fires put out:        {rep['fires_put_out']}/{rep['fires_total']}",
         f"collisions:           {rep['collisions'] if rep['collisions'] is not None else 'unknown'}",
     ]
+    for sc in rep["scenarios"]:
+        log = sc.get("agent_log_during_cut")
+        if log is not None:
+            lines.append(f"  {sc['kind']} {sc['target']}: its agent logged {log['lines']} lines while cut, "
+                         f"heartbeat loss noticed: {'yes' if log['noticed_heartbeat_loss'] else 'NO'}"
+                         + (f", back {sc['t_back'] - sc['t_restore']:.0f} s (sim) after the restore"
+                            if sc.get("t_back") is not None and sc.get("t_restore") is not None else ""))
     lines += [f"FAILED: {f}" for f in rep["failures"]]
     return "\n".join(lines)

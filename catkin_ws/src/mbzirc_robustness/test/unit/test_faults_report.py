@@ -101,6 +101,8 @@ def test_robustness_report_counts(tmp_path):
     assert r["failures"] == ["link_cut_permanent 3: never noticed"]
     text = format_robustness(r)
     assert "link losses survived: 1/2" in text and "FAILED" in text
+    bumped = robustness_report(None, [], {"fires_extinguished": 1, "fires_total": 8, "crashes": ["1 hit 2"]})
+    assert bumped["failures"] == ["collisions during the mission: ['1 hit 2']"]
     write_json(str(tmp_path / "r" / "report.json"), r)
     assert json.loads((tmp_path / "r" / "report.json").read_text())["crashes"] == 1
 
@@ -117,3 +119,16 @@ def test_merge_fuzz_reports():
     assert m["summary"]["malformed_inputs_tried"] == 7 and m["summary"]["nodes"] == 2
     assert [d["node"] for d in m["summary"]["nodes_died"]] == ["/b"] and not m["summary"]["all_survived"]
     assert merge_fuzz_reports([]) is None
+
+
+def test_agent_log_window_finds_heartbeat_reaction_or_silence():
+    from datetime import datetime
+    lines = ["[rosout][INFO] 2026-11-21 08:51:29,182: [search_facade] GOING: holder 1/3\n",
+             "[rospy.internal][INFO] 2026-11-21 08:51:30,000: topic[/x] removing connection\n",
+             "[rosout][WARNING] 2026-11-21 08:51:40,100: central unit heartbeat lost: stopping the task safely\n",
+             "[rosout][INFO] 2026-11-21 08:53:00,000: later\n"]
+    w = F.agent_log_window(lines, datetime(2026, 11, 21, 8, 51, 35), datetime(2026, 11, 21, 8, 52, 0))
+    assert w["lines"] == 1 and w["noticed_heartbeat_loss"]
+    assert w["heartbeat_lines"] == ["08:51:40 WARNING: central unit heartbeat lost: stopping the task safely"]
+    quiet = F.agent_log_window(lines, datetime(2026, 11, 21, 8, 51, 41), datetime(2026, 11, 21, 8, 52, 30))
+    assert quiet["lines"] == 0 and not quiet["noticed_heartbeat_loss"]

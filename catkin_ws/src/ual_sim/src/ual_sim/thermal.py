@@ -84,8 +84,10 @@ class ThermalCamera:
             return temp
         rows = np.nonzero(hit)[0]
         p = origin + dirs[rows] * t[rows, None]                 # (H, 3) hit points
-        close = (np.linalg.norm(p[:, None, :] - fires.pos[None, fsel, :], axis=2)
-                 < max(C.FLAME_RING_RADIUS, C.GROUND_PLATE_RADIUS) + 0.3).any(axis=1)
+        cf = fires.pos[fsel]
+        # squared distances hit point <-> holder as one matrix product (cheap), to keep only nearby pixels
+        d2 = np.einsum("hk,hk->h", p, p)[:, None] - 2.0 * (p @ cf.T) + np.einsum("fk,fk->f", cf, cf)[None, :]
+        close = (d2 < (max(C.FLAME_RING_RADIUS, C.GROUND_PLATE_RADIUS) + 0.3) ** 2).any(axis=1)
         rows, p = rows[close], p[close]
         if len(rows) == 0:
             return temp

@@ -1,27 +1,22 @@
-"""UAV fire tasks: search_facade, go_to_facade_fire, extinguish_facade_fire, look_for_ground_fires,
-extinguish_ground_fire.
+"""UAV facade tasks: search_facade, go_to_facade_fire, extinguish_facade_fire.
 
-The tasks sense through the robot's own detectors (`sensed_objects`, `thermal_detection/fire_detected`)
-and the shared `/estimated_objects`; control loops run at the control rate and give up after a timeout.
+A water UAV visits the facade fire holders of a floor facing each one, asks its forward thermal camera
+whether it is hot, and takes the estimator's track of a hot one; to put it out it centres the hole (the
+middle of three circles of the circle detector) in front of its nozzle and pumps while centred.
 """
 from __future__ import annotations
 
 import math
-import threading
 from typing import Optional
 
 import numpy as np
-from mbzirc_comm_objs.msg import ObjectDetectionList
-from std_srvs.srv import Trigger
 
 from .. import constants as C
-from ..control import GroundFireCentering, HoleCentering, pick_hole, world_to_body, yaw_rate_to
+from ..control import HoleCentering, pick_hole, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
-from ..geometry import column_box, facade_standoff, lawnmower, swept_box
+from ..geometry import facade_standoff
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
-from .uav_motion import hold_box
-
-CAM_OFFSET_X = 0.15      # base_link -> camera_color_optical_frame (docs/interfaces.md)
+from .sensing import CAM_OFFSET_X, SensedObjects
 
 
 def gen_search_facade(goal, agent) -> dict:
@@ -35,72 +30,6 @@ def gen_facade_fire(goal, agent) -> dict:
     if not math.isfinite(d) or d < 0 or d > 10:
         raise ValueError(f'distance must be in [0, 10] m, got {d}')
     return {'fire_id': parse_fire(goal.fire_id, agent, (C.SUBTYPE_FACADE,)), 'distance': d}
-
-
-def gen_look_for_ground_fires(goal, agent) -> dict:
-    """LookForGroundFires goal -> userdata (optional path)."""
-    return {'path': parse_path(goal.path, agent)}
-
-
-def gen_ground_fire(goal, agent) -> dict:
-    """A goal naming a ground fire."""
-    return {'fire_id': parse_fire(goal.fire_id, agent, (C.SUBTYPE_GROUND,))}
-
-
-class SensedObjects:
-    """Latest detections of the robot's own detectors, kept by a task-dependent callback."""
-
-    def __init__(self, task: AgentTask) -> None:
-        self.task = task
-        self.lock = threading.Lock()
-        self.holes: list = []            # (body-frame point, radius m)
-        self.holes_time = -1e9
-        self.fire: Optional[tuple] = None  # (arena position, body relative position, camera direction)
-        self.fire_time = -1e9
-        task.iface.add_subscriber(task.name, 'sensed_objects', ObjectDetectionList, self.on_msg)
-
-    def on_msg(self, msg: ObjectDetectionList) -> None:
-        """Split holes (converted to the body frame) and fires."""
-        a = self.task.agent
-        now = a.backend.now()
-        holes = []
-        for d in msg.objects:
-            p = d.pose.pose.position
-            if not all(map(math.isfinite, (p.x, p.y, p.z))):
-                a.backend.logerr_throttle(5.0, 'sensed_objects: NaN position, ignored')
-                continue
-            if d.type == C.TYPE_HOLE:
-                b = self._to_body(d.header.frame_id, (p.x, p.y, p.z))
-                if b is not None:
-                    holes.append((b, float(d.scale.x)))
-            elif d.type == C.TYPE_FIRE:
-                r = d.relative_position
-                with self.lock:
-                    self.fire = ((p.x, p.y, p.z), (r.x, r.y, r.z), d.image_detection.camera_direction)
-                    self.fire_time = now
-        if holes:
-            with self.lock:
-                self.holes, self.holes_time = holes, now
-
-    def _to_body(self, frame: str, p) -> Optional[np.ndarray]:
-        frame = frame.lstrip('/')
-        if frame.endswith('optical_frame'):               # x right, y down, z forward
-            return np.array([p[2] + CAM_OFFSET_X, -p[0], -p[1]])
-        if frame.endswith('base_link'):
-            return np.array(p)
-        if frame in ('', C.GLOBAL_FRAME):
-            pose = self.task.agent.position()
-            return world_to_body(np.array(p) - pose[:3], pose[3])
-        self.task.agent.backend.logerr_throttle(5.0, f'sensed_objects: hole in unknown frame {frame!r}')
-        return None
-
-    def recent_holes(self, max_age: float) -> list:
-        with self.lock:
-            return list(self.holes) if self.task.agent.backend.now() - self.holes_time <= max_age else []
-
-    def recent_fire(self, max_age: float) -> Optional[tuple]:
-        with self.lock:
-            return self.fire if self.task.agent.backend.now() - self.fire_time <= max_age else None
 
 
 def choose_hole(holes: list) -> Optional[np.ndarray]:
@@ -293,89 +222,3 @@ class ExtinguishFacadeFire(AgentTask):
                 else:
                     cold_since = None
             a.backend.sleep(dt)
-
-
-class LookForGroundFires(AgentTask):
-    """Fly a path (default: lawn-mower over ~ground_search_area) with the downward thermal camera."""
-    INPUT_KEYS = ['path']
-
-    def run(self, ud) -> str:
-        a = self.agent
-        if ud.path:
-            path = [(pos, yaw) for pos, yaw in ud.path]
-        else:
-            h = float(a.p['ground_search_height'])
-            path = [(p, None) for p in lawnmower(a.p['ground_search_area'], float(a.p['ground_search_spacing']), h)]
-        known = {int(o.id) for o in a.fires((C.SUBTYPE_GROUND,))}
-
-        def new_fire() -> bool:
-            return bool(a.p['stop_at_first_fire']) and any(
-                int(o.id) not in known for o in a.fires((C.SUBTYPE_GROUND,)))
-        margin = float(a.p['region_margin'])
-        for i, (wp, yaw) in enumerate(path):
-            self.feedback('SEARCHING', f'leg {i + 1}/{len(path)}')
-            here = a.position()
-            a.reserve(self, 'go_to', swept_box(here[:3], wp, margin))
-            arrived = a.move_to(self, wp, yaw, f'search leg {i + 1}/{len(path)}', stop_when=new_fire)
-            a.reserve(self, 'hold', hold_box(a, a.position()))
-            a.free('go_to')
-            if not arrived:
-                break
-        ids = [int(o.id) for o in a.fires((C.SUBTYPE_GROUND,))]
-        self.result['fire_ids'] = ids
-        self.result['message'] = f'active ground fires: {ids}' if ids else 'no ground fire found'
-        return C.SUCCESS
-
-
-class ExtinguishGroundFire(AgentTask):
-    """Fly over the fire, descend while centring it, release the blanket, climb back."""
-    INPUT_KEYS = ['fire_id']
-
-    def __init__(self, name, agent, **args) -> None:
-        super().__init__(name, agent, **args)
-        self.sensed = SensedObjects(self)
-
-    def run(self, ud) -> str:
-        a = self.agent
-        if not a.blanket_attached:
-            raise TaskError('no blanket attached: go home for a new one first')
-        fire = np.array(fire_position(a, ud.fire_id))
-        h = float(a.p['ground_search_height'])
-        self.feedback('APPROACHING', f'over fire {ud.fire_id}')
-        if self.call_task('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
-        half = float(a.p['hold_half_size'])
-        a.reserve(self, 'descend', column_box(fire[0], fire[1], fire[2], fire[2] + h + half, half + 1.0))
-        ctl = GroundFireCentering(release_height=float(a.p['blanket_release_height']))
-        try:
-            self._descend(ctl, fire, ud.fire_id)
-            self.feedback('RELEASING', f'releasing the blanket over fire {ud.fire_id}')
-            a.trigger(a.iface.add_client('actuators_system/release_blanket', Trigger), 'release_blanket')
-            self.wait_for(lambda: not a.blanket_attached, 5.0, 'the blanket to fall')
-        finally:
-            self.feedback('CLIMBING', 'climbing back')
-            p = a.position()
-            try:
-                a.move_to(self, (p[0], p[1], fire[2] + h), None, 'climb back')
-            finally:
-                a.free('descend')
-        a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
-        self.result.update(extinguished=True, message=f'blanket released over fire {ud.fire_id}')
-        return C.SUCCESS
-
-    def _descend(self, ctl: GroundFireCentering, fire, fire_id: int) -> None:
-        a = self.agent
-        start = a.backend.now()
-        while True:
-            self.check_preempt()
-            if a.backend.now() - start > float(a.p['centering_timeout']):
-                raise TaskError(f'could not centre fire {fire_id} in {a.p["centering_timeout"]:.0f} s')
-            det = self.sensed.recent_fire(0.5)
-            target = fire[:2] if det is None or det[2] != C.CAMERA_DOWNWARD else np.array(det[0][:2])
-            p = a.position()
-            if ctl.ready(p, target, fire[2]):
-                return
-            a.send_velocity(ctl.velocity(p, target, fire[2]))
-            self.feedback('DESCENDING', f'fire {fire_id}: {math.hypot(*(target - p[:2])):.2f} m off, '
-                                        f'z {p[2]:.1f}')
-            a.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
