@@ -56,6 +56,8 @@ STEP_TOLERANCE = 2e-4
 #: turn of 0.07 rad between scans (1 rad/s at 15 Hz) moves points 5 m away by several fine cells, outside
 #: the basin of the bilinear field; the best-fitting offset puts the matcher back inside it.
 ROTATION_SEARCH_OFFSETS = (-0.16, -0.12, -0.08, -0.04, 0.0, 0.04, 0.08, 0.12, 0.16)
+#: Another start only replaces the predicted pose when its residual is lower by more than this fraction.
+START_MARGIN = 0.05
 
 #: Largest rotation (rad) a single Gauss-Newton step may make: a step larger than this is almost always
 #: the linearisation running away, not the true motion.

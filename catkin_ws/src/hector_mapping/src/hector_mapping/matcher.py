@@ -12,7 +12,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .constants import ITERATION_EXTENSION, MAX_ROTATION_STEP, STEP_TOLERANCE
+from .constants import ITERATION_EXTENSION, MAX_ROTATION_STEP, START_MARGIN, STEP_TOLERANCE
 from .geometry import wrap_angle
 from .grid import GridLevel
 
@@ -77,16 +77,27 @@ def _linearise(level: GridLevel, pts: np.ndarray, pose: np.ndarray
     return jac.T @ jac, jac.T @ r, float(np.dot(r, r)) / max(len(r), 1)
 
 
+def best_start(level: GridLevel, pts: np.ndarray, bases: Sequence[np.ndarray], offsets: Sequence[float],
+               margin: float = START_MARGIN) -> np.ndarray:
+    """Of each base pose turned by each rotation offset, the one whose residual is lowest.
+
+    All candidates are scored in one batch. The first base unturned is kept unless another candidate
+    is better by more than ``margin`` (relative): on a flat residual landscape (few, far points) a
+    marginal winner is noise, and following it every scan would make the pose wander.
+    """
+    offs = sorted(offsets, key=abs)
+    cands = np.array([[b[0], b[1], wrap_angle(b[2] + o)] for b in bases for o in offs])
+    scores = residuals(level, pts, cands)
+    best = int(np.argmin(scores))
+    if scores[best] >= (1.0 - margin) * scores[0]:
+        best = 0
+    return cands[best].copy()
+
+
 def best_rotation(level: GridLevel, pts: np.ndarray, pose: np.ndarray, offsets: Sequence[float]
                   ) -> np.ndarray:
     """``pose`` turned by the offset (from ``offsets``) whose residual is lowest."""
-    best, best_res = np.array(pose, dtype=np.float64), math.inf
-    for off in offsets:
-        cand = np.array([pose[0], pose[1], wrap_angle(pose[2] + off)])
-        res = residual(level, pts, cand)
-        if res < best_res - 1e-12 or (off == 0.0 and res <= best_res):
-            best, best_res = cand, res
-    return best
+    return best_start(level, pts, [np.asarray(pose, np.float64)], offsets)
 
 
 def match_level(level: GridLevel, pts: np.ndarray, pose: np.ndarray, iterations: int,

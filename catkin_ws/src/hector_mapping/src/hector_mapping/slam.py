@@ -18,7 +18,7 @@ from .constants import (COVARIANCE_FLOOR, ITERATION_EXTENSION, ITERATIONS_COARSE
                         ROTATION_SEARCH_OFFSETS)
 from .geometry import transform_points, wrap_angle
 from .grid import GridLevel
-from .matcher import MatchResult, best_rotation, match_level, residuals
+from .matcher import MatchResult, best_start, match_level, residuals
 
 
 @dataclass
@@ -145,7 +145,10 @@ class HectorSlam:
             predicted = self._predict(stamp)
             guess = predicted
             if self.params.rotation_search:
-                guess = best_rotation(self.levels[-1], points, guess, ROTATION_SEARCH_OFFSETS)
+                # The last pose competes with the prediction: a wrong velocity (from a poor match) must
+                # not feed back into the next guess and run away.
+                bases = [predicted] if np.allclose(predicted, self.pose) else [predicted, self.pose]
+                guess = best_start(self.levels[-1], points, bases, ROTATION_SEARCH_OFFSETS)
             result = self._coarse_to_fine(points, guess)
             if self.params.recovery_search and self._fits_badly(result.residual):
                 result = self._recover(points, predicted, result)

@@ -112,3 +112,18 @@ def test_recovery_search_catches_a_jump_out_of_the_basin():
         assert slam.recoveries == (1 if recovery else 0)
     assert errors[True][0] < 0.06 and errors[True][1] < 0.02
     assert errors[False][1] > 0.1
+
+
+def test_standing_still_with_few_far_points_does_not_run_away():
+    """A UAV on the ground outside sees ~90 returns of two facades 14-25 m away: the fit is poor and a
+    wrong velocity from one bad match used to feed the next prediction until the pose ran away by
+    kilometres. The last pose now competes with the prediction; the wander stays bounded."""
+    far = sim2d.SegmentWorld(np.array([[-20.0, 5.05, 25.0, 5.05], [13.4, -10.0, 13.4, 5.05]]))
+    ranges = far.raycast(0.0, 0.0, 0.0)
+    slam = HectorSlam(SlamParams(**THESIS, map_size=1024))
+    rng = np.random.default_rng(0)
+    drift = 0.0
+    for k in range(60):
+        step = slam.process(pts(ranges + rng.normal(0.0, 0.01, ranges.shape)), np.zeros(2), k / 10.0)
+        drift = max(drift, float(np.hypot(step.pose[0], step.pose[1])))
+    assert drift < 1.0

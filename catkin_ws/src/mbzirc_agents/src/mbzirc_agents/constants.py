@@ -67,9 +67,9 @@ GROUND_SEARCH_AREA = (-12.0, 6.0, 7.0, 30.0)
 # UGV: the ground-floor door (facade B, x 13-15.5 at y = 6.7), a pose outside it and a search path inside.
 UGV_DOOR_OUTSIDE = (14.25, 4.0)
 UGV_DOOR_INSIDE = (14.25, 9.0)
-# Viewpoints ~5 m from the ground-floor indoor holders (17.7, 8.5) and (17.9, 16.5): the UGV's level thermal
-# camera (at ground height in ual_sim) only sees a fire 1.5 m up from about 5 m away.
-UGV_INDOOR_PATH = [(14.25, 9.0), (12.4, 8.5), (16.5, 11.0), (19.5, 11.0), (23.0, 16.5)]
+# Viewpoints (x, y, yaw) ~5 m from the ground-floor indoor holders (17.7, 8.5) and (17.9, 16.5): the UGV's
+# level thermal camera (at ground height in ual_sim) only sees a fire 1.5 m up from about 5 m away.
+UGV_INDOOR_PATH = [(12.4, 8.5, 0.0), (16.5, 11.0, 0.0), (19.5, 11.0, 0.0), (23.0, 16.5, 3.14159)]
 
 # ---- agent defaults ---------------------------------------------------------------------------------
 CONTROL_RATE_HZ = 10.0          # every control / monitoring loop of a task

@@ -132,6 +132,18 @@ def in_footprint(p: Sequence[float], buildings: Sequence[Sequence[float]], margi
                for b in buildings)
 
 
+def faces_wall(pos: Sequence[float], yaw: Optional[float], buildings: Sequence[Sequence[float]],
+               max_dist: float = 3.5) -> bool:
+    """True when a building wall is straight ahead of pos (heading yaw) within max_dist, at pos's height."""
+    if yaw is None:
+        return False
+    for d in np.arange(0.1, max_dist + 1e-9, 0.1):
+        q = (pos[0] + d * math.cos(yaw), pos[1] + d * math.sin(yaw))
+        if any(b[0] <= q[0] <= b[2] and b[1] <= q[1] <= b[3] and pos[2] <= b[4] for b in buildings):
+            return True
+    return False
+
+
 # ---- paths -------------------------------------------------------------------------------------------
 def lawnmower(area: Sequence[float], spacing: float, z: float) -> list:
     """Boustrophedon waypoints [(x, y, z)] covering area (x_min, y_min, x_max, y_max), legs along x."""

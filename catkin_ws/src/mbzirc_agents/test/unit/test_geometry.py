@@ -76,3 +76,12 @@ def test_plan_2d_goes_around_the_building():
 def test_plan_2d_straight_when_free_and_none_when_goal_inside():
     assert g.plan_2d((0, 0), (5, 0), C.BUILDINGS, 1.0) == [(0, 0), (5, 0)]
     assert g.plan_2d((0, 0), (15, 10), C.BUILDINGS, 1.0) is None
+
+
+def test_faces_wall():
+    assert g.faces_wall((12.4, 22.0, 6.5), -math.pi / 2, C.BUILDINGS)        # 2.5 m north of facade A
+    assert not g.faces_wall((12.4, 22.0, 6.5), math.pi / 2, C.BUILDINGS)     # looking away
+    assert not g.faces_wall((9.2, 21.7, 6.5), -math.pi / 2, C.BUILDINGS)     # corner waypoint
+    assert not g.faces_wall((30.0, 21.5, 6.5), -math.pi / 2, C.BUILDINGS)    # above the extension roof
+    assert g.faces_wall((30.0, 21.5, 2.0), -math.pi / 2, C.BUILDINGS)
+    assert not g.faces_wall((12.4, 22.0, 6.5), None, C.BUILDINGS)

@@ -102,7 +102,7 @@ FIRES_RATE = 2.0           # Hz (/sim/fires, /sim/score)
 # --- wind gusts near the first floor ---
 WIND_Z_RANGE = (4.0, 10.0)  # m
 WIND_MAX_DIST = 4.0        # m from the tower footprint
-WIND_GUST_STD = 0.3        # m/s (Ornstein-Uhlenbeck displacement velocity)
+WIND_GUST_STD = 0.6        # m/s: Ornstein-Uhlenbeck gust velocity (a position error of ~0.1-0.4 m after the controller)
 WIND_GUST_TAU = 2.0        # s
 HOLD_GAIN = 2.0            # 1/s: position-hold pull back to the set-point
 

@@ -49,6 +49,7 @@ class Robot:
         self.refill_timer = 0.0
         self.refills = 0
         self.wind = np.zeros(2)
+        self.wind_error = np.zeros(2)     # position error the gusts cause (bounded by the controller)
         self.radius = C.UAV_RADIUS if self.is_uav else C.UGV_RADIUS
         self.body_offset = C.UAV_BODY_OFFSET_Z if self.is_uav else C.UGV_BODY_OFFSET_Z
         self.max_vxy = C.UAV_MAX_VXY if self.is_uav else C.UGV_MAX_V
@@ -244,19 +245,24 @@ class Robot:
             self.state = C.LANDED_ARMED
 
     def _wind(self, dt: float, rng: np.random.Generator) -> None:
-        """Gusts near the first floor close to the tower: an Ornstein-Uhlenbeck drift the controller fights."""
+        """Gusts near the first floor close to the tower, fought by the position controller.
+
+        The gust is an Ornstein-Uhlenbeck velocity; the controller turns it into a bounded position error
+        (first order: error' = gust - HOLD_GAIN * error), and only the change of that error moves the UAV.
+        So the UAV wobbles about its set-point or path by a few tens of centimetres but never drifts away.
+        """
         z0, z1 = C.WIND_Z_RANGE
-        w = self.world
         near = False
         if z0 <= self.pos[2] <= z1 and C.WIND_GUST_STD > 0.0:
-            d = w.boxes_near(self.pos, C.WIND_MAX_DIST)
-            near = len(d) > 0
-        if not near:
+            near = len(self.world.boxes_near(self.pos, C.WIND_MAX_DIST)) > 0
+        if near:
+            a = math.exp(-dt / C.WIND_GUST_TAU)
+            self.wind = a * self.wind + math.sqrt(1.0 - a * a) * C.WIND_GUST_STD * rng.standard_normal(2)
+        else:
             self.wind[:] = 0.0
-            return
-        a = math.exp(-dt / C.WIND_GUST_TAU)
-        self.wind = a * self.wind + math.sqrt(1.0 - a * a) * C.WIND_GUST_STD * rng.standard_normal(2)
-        self.pos[:2] += self.wind * dt
+        prev = self.wind_error.copy()
+        self.wind_error += (self.wind - C.HOLD_GAIN * self.wind_error) * dt
+        self.pos[:2] += self.wind_error - prev
 
     def _refill(self, dt: float) -> None:
         """The human reset of the competition: landed, disarmed near home for REFILL_TIME -> full tank, blanket."""

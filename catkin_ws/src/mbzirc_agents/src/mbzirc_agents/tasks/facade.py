@@ -14,7 +14,7 @@ import numpy as np
 from .. import constants as C
 from ..control import HoleCentering, pick_hole, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
-from ..geometry import facade_standoff
+from ..geometry import facade_standoff, faces_wall
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects
 
@@ -48,7 +48,11 @@ def choose_hole(holes: list) -> Optional[np.ndarray]:
 
 
 class SearchFacade(AgentTask):
-    """Visit the facade fire holders of a floor; at each, face it and ask the forward thermal camera."""
+    """Visit the facade fire holders of a floor; at each, face it and ask the forward thermal camera.
+
+    With a goal path, every pose that faces a wall within 3.5 m is a holder to check; the others are
+    transit waypoints (corners between facades).
+    """
     INPUT_KEYS = ['floor', 'path']
 
     def run(self, ud) -> str:
@@ -61,6 +65,8 @@ class SearchFacade(AgentTask):
             self.feedback('GOING', f'holder {i + 1}/{len(stops)}')
             if self.call_task('go_to', {'waypoint': (pos, yaw)}) != C.SUCCESS:
                 raise TaskError(f'holder {i + 1}: {self.last_sub_result.get("message")}')
+            if holder is None and not faces_wall(pos, yaw, C.BUILDINGS):
+                continue                                 # a transit waypoint (e.g. around a corner)
             self.feedback('CHECKING', f'holder {i + 1}/{len(stops)}: looking with the thermal camera')
             self.sleep(1.0)                              # let the frame filter forget the last holder
             if not self._hot(float(a.p['check_fire_time'])):

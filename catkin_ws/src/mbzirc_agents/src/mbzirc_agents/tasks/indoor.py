@@ -61,7 +61,11 @@ class EnterBuilding(AgentTask):
 
 
 class SearchIndoor(AgentTask):
-    """Follow the path inside; at each waypoint turn on the spot looking with the thermal camera."""
+    """Follow the path inside; look with the thermal camera at each waypoint.
+
+    A waypoint with an orientation is a viewpoint: the robot looks that way for `~check_fire_time`. One
+    without (an all-zero quaternion) makes it turn on the spot and look along the four wall directions.
+    """
     INPUT_KEYS = ['floor', 'path']
 
     def run(self, ud) -> str:
@@ -72,7 +76,7 @@ class SearchIndoor(AgentTask):
             self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
             if self.call_task('move', {'waypoint': (wp, yaw)}) != C.SUCCESS:
                 raise TaskError(f'waypoint {i + 1}: {self.last_sub_result.get("message")}')
-            found = self._look_around(ud.floor, i, len(path))
+            found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p['stop_at_first_fire']:
                 break
         self.result['fire_ids'] = found
@@ -88,21 +92,34 @@ class SearchIndoor(AgentTask):
         return [int(o.id) for o in self.agent.fires((C.SUBTYPE_INDOOR,))
                 if floor_of(o.pose.pose.position.z) == floor or floor == 0 and o.pose.pose.position.z < 5.0]
 
-    def _look_around(self, floor: int, i: int, n: int) -> list:
+    def _look(self, floor: int, i: int, n: int, yaw) -> list:
         a = self.agent
         p = a.position()
-        base = round(p[3] / (math.pi / 2)) * (math.pi / 2)   # the walls are axis-aligned: look along them
-        for k in range(4):
-            yaw = base + k * math.pi / 2
-            self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/4')
-            a.move_to(self, p[:3], yaw, 'turning')
-            self.sleep(1.5)                          # the detector needs > 1 s of hot frames
-            if a.fire_detected():
-                self.sleep(float(a.p['confirm_time']) / 2)
+        if yaw is not None:
+            yaws, each = [yaw], float(a.p['check_fire_time'])
+        else:
+            base = round(p[3] / (math.pi / 2)) * (math.pi / 2)   # the walls are axis-aligned
+            yaws, each = [base + k * math.pi / 2 for k in range(4)], 2.0
+        for k, y in enumerate(yaws):
+            self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/{len(yaws)}')
+            a.move_to(self, p[:3], y, 'turning')
+            if self._hot(each):
+                end = a.backend.now() + float(a.p['confirm_time'])
+                while not self._fires(floor) and a.backend.now() < end:
+                    self.sleep(0.25)
             found = self._fires(floor)
             if found:
                 return found
         return self._fires(floor)
+
+    def _hot(self, seconds: float) -> bool:
+        """Poll the thermal camera's frame filter for up to seconds (it needs > 1 s of hot frames)."""
+        end = self.agent.backend.now() + seconds
+        while self.agent.backend.now() < end:
+            self.sleep(0.25)
+            if self.agent.fire_detected():
+                return True
+        return False
 
 
 class ExtinguishIndoorFire(AgentTask):

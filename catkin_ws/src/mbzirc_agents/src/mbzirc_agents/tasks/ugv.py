@@ -56,7 +56,7 @@ class UgvSearchIndoor(SearchIndoor):
         into = math.atan2(ins[1] - out[1], ins[0] - out[0])
         z = self.agent.position()[2]
         pts = [((out[0], out[1], z), into), ((ins[0], ins[1], z), into)]
-        pts += [((x, y, z), None) for x, y in p['indoor_search_path']]
+        pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p['indoor_search_path']]
         return pts
 
 
