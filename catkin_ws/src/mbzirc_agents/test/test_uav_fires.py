@@ -63,7 +63,7 @@ class TestUavFires(unittest.TestCase):
         state, res = run(1, 'take_off', 'TakeOff', 60, height=4.0)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         x, y = target.position.x, target.position.y
-        path = [pose(x - 4, y, 4.0), pose(x + 4, y, 4.0)]
+        path = [pose(x - 0.3, y, 4.0), pose(x + 0.3, y, 4.0)]      # stop over the holder, as the central unit
         state, res = run(1, 'look_for_ground_fires', 'LookForGroundFires', 150, path=path)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         self.assertGreaterEqual(len(res.fire_ids), 1, res.message)

@@ -61,7 +61,7 @@ class FireDetectorNode:
         rospy.Subscriber("ual/pose", PoseStamped, self.on_pose, queue_size=1)
         if config.camera_direction == C.CAMERA_DIRECTION_FORWARD:
             rospy.Subscriber("scan", LaserScan, self.on_scan, queue_size=1)
-        rospy.Subscriber("teraranger_evo_thermal/raw_temp_array", Float64MultiArray, self.on_temperatures, queue_size=1)
+        rospy.Subscriber("teraranger_evo_thermal/raw_temp_array", Float64MultiArray, self.on_temperatures, queue_size=5)
         if self.debug_view:
             rospy.Subscriber("teraranger_evo_thermal/rgb_image", Image, self.on_rgb_image, queue_size=1)
         rospy.loginfo("fire_detector: %s camera, threshold %.1f degC, filter %d frames",

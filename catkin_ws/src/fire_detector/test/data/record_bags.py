@@ -101,8 +101,10 @@ def record(path, ns, topics, seconds, keep_every=None, during=None):
 
 def main():
     rospy.init_node("record_bags")
-    fires = rospy.wait_for_message("/sim/fires", FireStateArray, timeout=30).fires
-    world = yaml.safe_load(open(os.path.join(os.path.dirname(__import__("ual_sim").__file__), "worlds", "c3_default.yaml")))
+    fires = rospy.wait_for_message("/sim/fires", FireStateArray, timeout=90).fires
+    import rospkg
+    world_file = os.path.join(rospkg.RosPack().get_path("ual_sim"), "src", "ual_sim", "worlds", "c3_default.yaml")
+    world = yaml.safe_load(open(world_file))
     holders = {h["id"]: h for h in world["facade_holders"]}
     by_id = {f.id: f for f in fires}
     active = [h for k, h in holders.items() if f"facade_{k}" in by_id and by_id[f"facade_{k}"].active]
@@ -116,11 +118,25 @@ def main():
     print("active facade:", [h["id"] for h in active], "inactive:", [h["id"] for h in inactive],
           "ground:", [(f.position.x, f.position.y) for f in ground], flush=True)
     side = lambda h: h["id"][0]  # noqa: E731
-    act = sorted(active, key=lambda h: (side(h) != "A", h["position"][2]))[0]
+    act = sorted(active, key=lambda h: (h["position"][2] < 2.0, side(h) != "A", h["position"][2]))[0]
     ina = sorted(inactive, key=lambda h: (side(h) != "A", abs(h["position"][2] - 7)))[0]
     truth = {}
-    for ns in ("mbzirc2020_1", "mbzirc2020_2"):
+    rgbd_only = "--rgbd-only" in sys.argv  # run again with the simulator at rtf 1: RGB-D rendering is slow
+    for ns in ("mbzirc2020_1", "mbzirc2020_2")[rgbd_only:]:
         rospy.ServiceProxy(f"/{ns}/ual/take_off", TakeOff)(height=4.0, blocking=True)
+    if rgbd_only:
+        ns = "mbzirc2020_2"
+        near_, yaw = facade_front(act, 2.5)
+        staging, _ = facade_front(act, 9.0)
+        fly_to_facade(ns, near_, yaw, staging)
+        go(ns, *near_, yaw)
+        rospy.sleep(1.0)
+        record(os.path.join(CIRCLE_DATA, "facade_holder_rgbd.bag"), ns, RGBD_TOPICS, 4.0)
+        with open(os.path.join(CIRCLE_DATA, "bags.yaml"), "w") as f:
+            f.write("# Recorded from ual_sim (seed 1, rtf 1) by fire_detector/test/data/record_bags.py --rgbd-only.\n")
+            yaml.safe_dump({"facade_holder_rgbd.bag": {"ns": ns, "hole_arena": list(act["position"]),
+                                                       "uav_xyz_yaw": [*near_, yaw], "distance": 2.5}}, f)
+        return
 
     # 1. ground fire seen from 4 m by the blanket UAV (DOWNWARD)
     g = ground[0].position
@@ -138,8 +154,8 @@ def main():
     record(os.path.join(HERE, "facade_fire_approach.bag"), ns, THERMAL_TOPICS, 8.0,
            during=lambda: go(ns, *near_, yaw))
     truth["facade_fire_approach.bag"] = {"ns": ns, "camera_config": "FORWARD", "fire": list(act["position"])}
-    record(os.path.join(CIRCLE_DATA, "facade_holder_rgbd.bag"), ns, RGBD_TOPICS, 2.0,
-           keep_every={"camera/color/image_rect_color": 3, "camera/aligned_depth_to_color/image_raw": 3})
+    record(os.path.join(CIRCLE_DATA, "facade_holder_rgbd.bag"), ns, RGBD_TOPICS, 8.0,
+           keep_every={})
     circle_truth = {"facade_holder_rgbd.bag": {"ns": ns, "hole_arena": list(act["position"]),
                                                "uav_xyz_yaw": [*near_, yaw], "distance": 2.5}}
 

@@ -58,6 +58,7 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'ground_search_area': list(C.GROUND_SEARCH_AREA),
     'ground_search_height': 4.0,
     'ground_search_spacing': 3.0,
+    'ground_check_time': 1.5,          # s of dwell at each ground-search waypoint (frame filter > 1 s)
     'blanket_release_height': 1.5,
     'entry_depth': 2.5,
     'indoor_fire_distance': 1.5,
@@ -200,12 +201,17 @@ class RobotAgent(Agent):
         return None
 
     # ---- state accessors for tasks ------------------------------------------------------------------
-    def position(self) -> np.ndarray:
-        """Current x, y, z, yaw; TaskError when no pose has arrived."""
-        with self.state_lock:
-            if self.pose is None:
+    def position(self, wait: float = 10.0) -> np.ndarray:
+        """Current x, y, z, yaw; waits up to `wait` s for the first pose (a goal may come before the
+        UAL's first message), then TaskError."""
+        end = self.backend.now() + wait
+        while True:
+            with self.state_lock:
+                if self.pose is not None:
+                    return self.pose.copy()
+            if self.backend.now() >= end or self.backend.is_shutdown():
                 raise TaskError('no pose received on ual/pose')
-            return self.pose.copy()
+            self.backend.sleep(0.1)
 
     def fire(self, fire_id: int) -> Any:
         """The estimated object with this id (an mbzirc_comm_objs/Object); ValueError when unknown."""
@@ -282,7 +288,7 @@ class RobotAgent(Agent):
     def hold(self) -> None:
         """Stop where the robot is (a waypoint at the current pose); quiet if that fails."""
         try:
-            p = self.position()
+            p = self.position(wait=0.0)
             if self.is_moving_state():
                 self.send_waypoint(p[0], p[1], p[2], p[3])
         except Exception as e:
@@ -398,7 +404,7 @@ class RobotAgent(Agent):
         if now - self._last_park_try < 2.0:
             return
         self._last_park_try = now
-        p, h = self.position(), float(self.p['parked_half_size'])
+        p, h = self.position(wait=0.0), float(self.p['parked_half_size'])
         req = AskForRegionRequest(agent_id=self.agent_id, label='parked')
         req.min_corner = PointStamped()
         req.max_corner = PointStamped()
@@ -424,4 +430,4 @@ class RobotAgent(Agent):
 
     def cost_to_go_to(self, target: Sequence[float]) -> float:
         """Straight-line distance (UAV); the UGV plans around the building."""
-        return float(np.linalg.norm(np.asarray(target) - self.position()[:3]))
+        return float(np.linalg.norm(np.asarray(target) - self.position(wait=0.0)[:3]))

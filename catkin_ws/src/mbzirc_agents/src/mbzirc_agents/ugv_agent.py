@@ -41,6 +41,6 @@ class UgvAgent(RobotAgent):
 
     def cost_to_go_to(self, target) -> float:
         """Length of the planned 2D path (-1 when no path)."""
-        here = self.position()
+        here = self.position(wait=0.0)
         path = plan_2d(here[:2], target[:2], C.BUILDINGS, float(self.p['building_clearance']))
         return -1.0 if path is None else path_length(path)

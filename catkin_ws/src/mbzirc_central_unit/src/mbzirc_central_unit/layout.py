@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Optional, Sequence
 
 from . import constants as C
 from .geometry import Point, Pose, floor_of, segment_hits_rect
@@ -45,8 +45,24 @@ class Room:
     path: list[Pose]       # viewpoints inside, facing the indoor holders they cover
 
     def sees(self, p: Point, walls: list[Rect]) -> bool:
-        """True if a straight line from the room's inner point or viewpoints reaches p without a wall."""
-        return any(not any(segment_hits_rect(q, p, w) for w in walls) for q in [self.inner] + self.path)
+        """True if a straight line from the room's inner point or viewpoints reaches p without a wall
+        (`walls` as thin centre lines, see `thin`)."""
+        return any(line_of_sight(q, p, walls) for q in [self.inner] + self.path)
+
+
+def thin(w: Rect, half: float = 0.01) -> Rect:
+    """A wall reduced to its centre line: a fire on a wall face is estimated on, or a little into, that
+    wall, and must count as seen from the room on its side of the wall's middle."""
+    if w[2] - w[0] < w[3] - w[1]:
+        c = (w[0] + w[2]) / 2
+        return (c - half, w[1], c + half, w[3])
+    c = (w[1] + w[3]) / 2
+    return (w[0], c - half, w[2], c + half)
+
+
+def line_of_sight(p: Sequence[float], q: Sequence[float], walls: list[Rect]) -> bool:
+    """True if no wall cuts the straight 2D line p-q."""
+    return not any(segment_hits_rect(p, q, w) for w in walls)
 
 
 @dataclass
@@ -69,13 +85,13 @@ class Layout:
 
     def room_for(self, floor: int, p: Point) -> Optional[int]:
         """Index of the room of `floor` that sees the point p (nearest such room), or None."""
-        walls = self.walls_2d(floor)
+        walls = [thin(w) for w in self.walls_2d(floor)]
         best = [(math.dist(r.inner, p), i) for i, r in enumerate(self.rooms.get(floor, [])) if r.sees(p, walls)]
         return min(best)[1] if best else None
 
     def clear_indoors(self, floor: int, p: Point, q: Point) -> bool:
-        """True if the straight line p-q inside a floor crosses no interior wall."""
-        return not any(segment_hits_rect(p, q, w) for w in self.walls_2d(floor))
+        """True if the straight line from p to q inside a floor crosses no interior wall's centre line."""
+        return line_of_sight(p, q, [thin(w) for w in self.walls_2d(floor)])
 
 
 def build_rooms(layout: Layout) -> dict[int, list[Room]]:

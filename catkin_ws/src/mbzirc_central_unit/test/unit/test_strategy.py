@@ -324,3 +324,19 @@ def test_fire_tracks_far_from_every_holder_are_not_targets():
     s2 = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
     cmd = s2.decide(WorldView(0.0, {"2": a}, {9: near}))[0]
     assert cmd.target == ("transit", 1) and "fire 9" in cmd.reason
+
+
+def test_an_indoor_fire_estimated_slightly_into_its_wall_is_put_out_from_the_room_in_front():
+    s = Strategy()
+    layout = s.p.layout
+    room = layout.rooms[1][0]                      # the west room, in front of in1_w (17.7, 8.5, 6.5)
+    view = room.path[0]
+    fire = FireView(40, 17.78, 8.6, 6.4, C.KIND_INDOOR)   # estimated 8 cm into the interior wall
+    assert layout.room_for(1, fire.position) == 0
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *view[:3], ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    cmd = s.decide(WorldView(0.0, {"2": a}, {40: fire}))[0]
+    assert (cmd.task, cmd.goal["fire_id"]) == (C.EXTINGUISH_INDOOR_FIRE, 40)
+    # The same fire is not "seen" from the east room, behind the wall.
+    east = layout.rooms[1][1].path[0]
+    assert not layout.clear_indoors(1, east[:3], fire.position)

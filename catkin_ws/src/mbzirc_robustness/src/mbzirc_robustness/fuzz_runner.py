@@ -26,6 +26,11 @@ from mbzirc_robustness.fuzz import FuzzCase, generate_cases, message_class
 from mbzirc_robustness.report import FuzzReport
 
 
+# One raw publisher per topic for the life of the process, never unregistered: after an unregister, rospy
+# subscribers keep reconnecting to us once a second and each attempt logs a long warning on our side.
+_PUBLISHERS: dict[str, rospy.Publisher] = {}
+
+
 def raw_message_class(cls: type) -> type:
     """A message class with ``cls``'s type and md5 whose ``serialize`` writes pre-made bytes.
 
@@ -110,9 +115,6 @@ class GraphFuzzer:
         self.me = rospy.get_name()
         self.master = rosgraph.Master(self.me)
         self.my_uri = rospy.get_node_uri() or ""
-        # publishers stay up until the end of run(): unregistering one per topic makes rospy subscribers
-        # retry the dropped connection and warn once a second
-        self._pubs: list[rospy.Publisher] = []
 
     # -----------------------------------------------------------------------------------------------
     def targets(self) -> list[G.Target]:
@@ -148,9 +150,6 @@ class GraphFuzzer:
                     report.set_pid_after(n, G.query_pid(self.master, n, self.me), "end of fuzzing")
         finally:
             sub.unregister()
-            for pub in self._pubs:
-                pub.unregister()
-            self._pubs = []
         with sink.lock:
             for line in sink.lines:
                 report.add_log(line)
@@ -209,8 +208,10 @@ class GraphFuzzer:
             report.add_skipped(tg.name, f"cannot load message type {tg.type}: {exc}")
             return
         cases = self._cases(tg, cls)
-        pub = rospy.Publisher(tg.name, raw_message_class(cls), queue_size=len(cases) + 1)
-        self._pubs.append(pub)
+        pub = _PUBLISHERS.get(tg.name)
+        if pub is None or pub.type != tg.type:
+            pub = rospy.Publisher(tg.name, raw_message_class(cls), queue_size=C.DEFAULT_MAX_CASES)
+            _PUBLISHERS[tg.name] = pub
         connected = self._wait_connected(tg, pub)
         sent = 0
         for case in cases:

@@ -13,8 +13,8 @@ Layout of a lab owned by process <pid> (names ``<prefix>-<pid>-<host>``)::
                               +-- ...
 
 A cut takes the robot's port off the bridge (``nomaster``): packets vanish without any local error, as on
-a faded Wi-Fi link. Everything is removed by ``close()`` (also on SIGTERM/SIGINT and at exit); ``cleanup_stale()`` removes
-labs whose owner process died without cleaning up (e.g. SIGKILL).
+a faded Wi-Fi link. Everything is removed by ``close()`` (also on SIGTERM/SIGINT and at exit);
+``cleanup_stale()`` removes labs whose owner process died without cleaning up (e.g. SIGKILL).
 """
 from __future__ import annotations
 

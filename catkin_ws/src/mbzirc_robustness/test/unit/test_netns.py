@@ -23,7 +23,8 @@ def test_plan_of_a_lab_with_two_hosts_and_a_cut():
     assert (gs.ip, uav.ip) == ("10.77.0.1", "10.77.0.2")
     assert gs.ns == f"{lab.lab}-gs" and lab.sw == f"{lab.lab}-sw"
     assert ["ip", "netns", "add", lab.sw] == rec.cmds[0]
-    assert ["ip", "-n", lab.sw, "link", "add", "p2", "type", "veth", "peer", "name", "eth0", "netns", uav.ns] in rec.cmds
+    veth = ["ip", "-n", lab.sw, "link", "add", "p2", "type", "veth", "peer", "name", "eth0", "netns", uav.ns]
+    assert veth in rec.cmds
     assert ["ip", "-n", uav.ns, "addr", "add", "10.77.0.2/24", "dev", "eth0"] in rec.cmds
     n = len(rec.cmds)
     lab.cut("uav1")

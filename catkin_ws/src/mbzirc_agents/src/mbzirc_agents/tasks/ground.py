@@ -56,10 +56,32 @@ class LookForGroundFires(AgentTask):
             a.free('go_to')
             if not arrived:
                 break
+            if self._dwell(new_fire):              # stopped here: the frame filter gets its frames
+                break
         ids = [int(o.id) for o in a.fires((C.SUBTYPE_GROUND,))]
         self.result['fire_ids'] = ids
         self.result['message'] = f'active ground fires: {ids}' if ids else 'no ground fire found'
         return C.SUCCESS
+
+
+    def _dwell(self, new_fire) -> bool:
+        """At a waypoint, watch the downward camera for ~ground_check_time s; when it reports a fire,
+        wait up to ~confirm_time for the estimator's track. True when a new fire is known."""
+        a = self.agent
+        end = a.backend.now() + float(a.p['ground_check_time'])
+        while a.backend.now() < end and not new_fire():
+            if a.fire_detected():
+                self.feedback('CHECKING', 'the downward camera sees a fire: waiting for its estimate')
+                self.wait_until(new_fire, float(a.p['confirm_time']))
+                break
+            self.sleep(0.25)
+        return new_fire()
+
+    def wait_until(self, cond, seconds: float) -> None:
+        """Poll cond for up to seconds (no error when it stays false)."""
+        end = self.agent.backend.now() + seconds
+        while not cond() and self.agent.backend.now() < end:
+            self.sleep(0.25)
 
 
 class ExtinguishGroundFire(AgentTask):
