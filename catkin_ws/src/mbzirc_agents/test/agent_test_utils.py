@@ -29,10 +29,15 @@ def run(robot, task, action, wall_timeout=120.0, feedback=None, **fields):
     """Send a goal and wait for it (wall-time cap); returns (GoalStatus, result)."""
     c = client(robot, task, action)
     c.send_goal(getattr(M, f'{action}Goal')(**fields), feedback_cb=feedback)
-    if not wait_wall(lambda: c.get_state() not in (0, 1), wall_timeout):   # PENDING, ACTIVE
+    if not wait_wall(lambda: done(c), wall_timeout):
         c.cancel_goal()
         raise AssertionError(f'{task} of {robot} did not finish in {wall_timeout} s')
     return c.get_state(), c.get_result()
+
+
+def done(c):
+    """True once the goal's result arrived (its status may come first: then get_result() is still None)."""
+    return c.simple_state == actionlib.SimpleGoalState.DONE
 
 
 def wait_wall(cond, timeout, step=0.1):

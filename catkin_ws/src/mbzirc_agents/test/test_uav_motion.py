@@ -7,7 +7,7 @@ import unittest
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
-from agent_test_utils import SimRobots, client, pose, run, wait_wall
+from agent_test_utils import SimRobots, client, done, pose, run, wait_wall
 from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
 from std_msgs.msg import Header
 from ual_sim.msg import Score
@@ -50,7 +50,7 @@ class TestUavMotion(unittest.TestCase):
         c3 = client(3, 'take_off', 'TakeOff')
         c2.send_goal(TakeOffGoal(height=3.0))
         c3.send_goal(TakeOffGoal(height=3.0))
-        self.assertTrue(wait_wall(lambda: c2.get_state() > 1 and c3.get_state() > 1, 60))
+        self.assertTrue(wait_wall(lambda: done(c2) and done(c3), 60))
         self.assertEqual(c2.get_state(), GoalStatus.SUCCEEDED, c2.get_result().message)
         self.assertEqual(c3.get_state(), GoalStatus.SUCCEEDED, c3.get_result().message)
         self.assertAlmostEqual(self.sim.poses[2][2], 3.0, delta=0.3)
@@ -69,7 +69,7 @@ class TestUavMotion(unittest.TestCase):
         self.assertEqual(g2.get_state(), GoalStatus.ACTIVE)
         state, res = run(3, 'go_to', 'GoTo', 60, waypoint=pose(6, 3.3, 3))
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
-        self.assertTrue(wait_wall(lambda: g2.get_state() > 1, 60))
+        self.assertTrue(wait_wall(lambda: done(g2), 60))
         self.assertEqual(g2.get_state(), GoalStatus.SUCCEEDED, g2.get_result().message)
         time.sleep(0.5)
         self.assertLess(math.dist(self.sim.poses[2], (0, 8, 3)), 0.3)
@@ -86,7 +86,7 @@ class TestUavMotion(unittest.TestCase):
         self.assertTrue(wait_wall(lambda: math.dist(self.sim.poses[2], start) > 3.0, 30))
         self.assertEqual(g.get_state(), GoalStatus.ACTIVE)
         g.cancel_goal()
-        self.assertTrue(wait_wall(lambda: g.get_state() > 1 and g.get_state() != 6, 20))
+        self.assertTrue(wait_wall(lambda: done(g), 20))
         self.assertEqual(g.get_state(), GoalStatus.PREEMPTED)
         time.sleep(0.5)
         p = self.sim.poses[2]
@@ -132,7 +132,7 @@ class TestUavMotion(unittest.TestCase):
         g.send_goal(GoToGoal(waypoint=pose(22, -10, 5)))   # far: still flying when the loss is seen
         time.sleep(1.0)
         beat.shutdown()                                         # the central unit dies
-        self.assertTrue(wait_wall(lambda: g.get_state() > 1, 30))
+        self.assertTrue(wait_wall(lambda: done(g), 30))
         self.assertEqual(g.get_state(), GoalStatus.ABORTED)
         self.assertIn('heartbeat', g.get_result().message)
         p = self.sim.poses[2]

@@ -56,7 +56,8 @@ class TestFuzzFixtures(unittest.TestCase):
         self.assertFalse(s["all_survived"])
         self.assertEqual([d["node"] for d in s["nodes_died"]], [FRAGILE])
         died_on = s["nodes_died"][0]["died_on"]
-        self.assertTrue(died_on.startswith("/pose"), died_on)
+        self.assertTrue(died_on.startswith("/pose: "), died_on)
+        self.assertIn("nan", died_on.lower(), "the window of cases named must hold the NaN that killed it")
         self.assertIsNone(query_pid(rosgraph.Master("/x"), FRAGILE))
 
 

@@ -50,6 +50,7 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'refill_timeout': 60.0,
     'facade_standoff': C.FACADE_STANDOFF,
     'shoot_distance': 1.5,
+    'min_wall_distance': 1.0,          # m: centring never moves the UAV centre closer to a facade
     'check_fire_time': 4.0,
     'confirm_time': 6.0,
     'centering_timeout': 30.0,

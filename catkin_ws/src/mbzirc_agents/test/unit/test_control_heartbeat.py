@@ -75,3 +75,15 @@ def test_watchdog():
     w.beat(167)
     assert w.state(168) == hb.OK
     assert w.state(10) == hb.OK               # time jumped back
+
+
+def test_keep_off_walls():
+    from mbzirc_agents.tasks.facade import keep_off_walls
+    # 0.7 m north of facade A (y = 19.5), flying south into it: the southward part is removed, pushed back
+    v = keep_off_walls((15.0, 20.2, 6.0), np.array([0.2, -0.5, 0.0]), 1.0)
+    assert v[1] > 0 and v[0] == pytest.approx(0.2)
+    # far from the walls: unchanged
+    assert list(keep_off_walls((0.0, 0.0, 3.0), np.array([0.2, -0.5, 0.1]), 1.0)) == [0.2, -0.5, 0.1]
+    # 0.9 m away, moving along the wall: unchanged; moving toward it: stopped
+    assert keep_off_walls((15.0, 20.4, 6.0), np.array([0.3, 0.0, 0.0]), 1.0)[1] == 0.0
+    assert keep_off_walls((15.0, 20.4, 6.0), np.array([0.0, -0.4, 0.0]), 1.0)[1] == pytest.approx(0.0)

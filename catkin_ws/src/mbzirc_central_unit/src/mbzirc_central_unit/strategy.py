@@ -31,6 +31,7 @@ from .world_model import AgentView, FireView, WorldView
 
 # The blanket UAV's searches in turn: the known outdoor holders (quick), then a sweep of the open area.
 GROUND_SEARCH_PLAN = ("holders", "holders", "sweep", "holders", "sweep")
+MIN_TRANSIT_Z = 1.5  # m: a transit starting lower climbs straight up to this first
 PLAUSIBLE_RADIUS = 2.0  # m from a holder of the layout for a facade / indoor fire track to be a target
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
@@ -481,9 +482,15 @@ class Strategy:
             # UAV out through the window it came in by (looking around once more on the way).
             return Command(a.agent_id, C.SEARCH_INDOOR, {"floor": G.floor_of(a.z), "path": out},
                            f"leaving floor {G.floor_of(a.z)} through the window", ("exit", G.floor_of(a.z)))
-        _, elevator, route = self._route(a, a.position, target)
         yaw = target[3] if len(target) > 3 else 0.0
-        path = [(x, y, z, yaw) for x, y, z in route]
+        start = a.position
+        climb = []
+        if start[2] < MIN_TRANSIT_Z:
+            # Close to the ground (e.g. after a fire at 0.75 m): straight up first, never a long leg low.
+            start = (start[0], start[1], MIN_TRANSIT_Z)
+            climb = [(*start, yaw)]
+        _, elevator, route = self._route(a, start, target)
+        path = climb + [(x, y, z, yaw) for x, y, z in route]
         return Command(a.agent_id, C.FOLLOW_PATH, {"path": path, "_elevator": elevator}, reason,
                        ("transit", floor))
 

@@ -340,3 +340,14 @@ def test_an_indoor_fire_estimated_slightly_into_its_wall_is_put_out_from_the_roo
     # The same fire is not "seen" from the east room, behind the wall.
     east = layout.rooms[1][1].path[0]
     assert not layout.clear_indoors(1, east[:3], fire.position)
+
+
+def test_a_transit_starting_near_the_ground_climbs_first():
+    s = Strategy()
+    a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=0.0, last_seen=0.0)
+    cmd = s.decide(WorldView(0.0, {"3": a}, {}))[0]
+    assert cmd.task == C.FOLLOW_PATH
+    first = cmd.goal["path"][0]
+    assert first[:2] == (23.7, 21.5) and first[2] >= 1.5
+    assert all(p[2] >= 1.5 for p in cmd.goal["path"])

@@ -16,6 +16,7 @@ DEFAULT_RATE_HZ = 20.0          # malformed messages per second per topic (keeps
 CONNECT_TIMEOUT_S = 3.0         # wait for subscribers to connect to the fuzz publisher
 SERVICE_CALL_TIMEOUT_S = 3.0    # a service that does not answer within this is reported as hung
 MAX_SERVICE_TIMEOUTS = 2        # stop fuzzing a service after this many unanswered calls
+CHECK_EVERY = 4                 # liveness (getPid) after every 4th case: a death names the last 4 cases
 SETTLE_S = 0.3                  # after each topic: let the callbacks run before checking liveness
 XMLRPC_TIMEOUT_S = 3.0          # getPid on a node
 DEFAULT_EXCLUDE_TOPICS = ("/clock", "/rosout", "/rosout_agg")

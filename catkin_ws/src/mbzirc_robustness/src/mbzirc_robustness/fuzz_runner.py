@@ -220,9 +220,10 @@ class GraphFuzzer:
             pub.publish(pub.data_class(case.payload))
             sent += 1
             time.sleep(self.period)
-            self._check(tg, report, case.label)
+            if sent % C.CHECK_EVERY == 0:
+                self._check(tg, report, _window_label(cases, sent))
         time.sleep(C.SETTLE_S)
-        self._check(tg, report, "after the last case")
+        self._check(tg, report, _window_label(cases, sent) + " (found after the last case)")
         report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected,
                          labels=[c.label for c in cases])
 
@@ -243,7 +244,8 @@ class GraphFuzzer:
                 break
             outcome = self._call(proxy, case)
             outcomes.append((case.label, outcome))
-            self._check(tg, report, case.label)
+            if len(outcomes) % C.CHECK_EVERY == 0 or outcome == "timeout" or len(outcomes) == len(cases):
+                self._check(tg, report, _window_label(cases, len(outcomes)))
             if sum(1 for _, o in outcomes if o == "timeout") >= C.MAX_SERVICE_TIMEOUTS:
                 break  # the server looks hung: do not pile up blocked calls
         report.add_input(G.KIND_SERVICE, tg.name, tg.type, tg.nodes, len(outcomes), outcomes=outcomes,
@@ -264,6 +266,12 @@ class GraphFuzzer:
         th.start()
         th.join(self.call_timeout)
         return result[0] if result else "timeout"
+
+
+def _window_label(cases: list[FuzzCase], sent: int) -> str:
+    """The cases that may have killed a node found dead after ``sent`` cases (the last CHECK_EVERY)."""
+    window = [c.label for c in cases[max(0, sent - C.CHECK_EVERY):sent]]
+    return " | ".join(window) if window else "before any case"
 
 
 def _stable_hash(name: str) -> int:

@@ -14,7 +14,7 @@ import numpy as np
 from .. import constants as C
 from ..control import HoleCentering, pick_hole, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
-from ..geometry import facade_standoff, faces_wall
+from ..geometry import facade_standoff, faces_wall, nearest_face
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects
 
@@ -45,6 +45,22 @@ def choose_hole(holes: list) -> Optional[np.ndarray]:
     optical = [(-h[1], -h[2], h[0] - CAM_OFFSET_X, r) for h, r in holes]   # x right, y down, z forward
     i = choose_middle_hole(optical)
     return None if i is None else holes[i][0]
+
+
+def keep_off_walls(p, v: np.ndarray, min_dist: float) -> np.ndarray:
+    """v without its component toward the nearest wall when closer than min_dist (and a push away when
+    closer than 0.8 x min_dist): whatever the detections say, the UAV never flies into the facade."""
+    normal, d = nearest_face(p[:3], C.BUILDINGS)
+    if normal is None or d >= min_dist or p[2] > max(b[4] for b in C.BUILDINGS):
+        return v
+    n = np.array([normal[0], normal[1], 0.0])
+    v = np.array(v, dtype=float)
+    toward = -float(v @ n)
+    if toward > 0:
+        v = v + toward * n
+    if d < 0.8 * min_dist:
+        v = v + 0.3 * n
+    return v
 
 
 class SearchFacade(AgentTask):
@@ -213,7 +229,8 @@ class ExtinguishFacadeFire(AgentTask):
             elif pumping_since is not None and now - last_centred > 1.0:
                 a.stop_pump()                           # off target: do not waste water
                 pumping_since = None
-            a.send_velocity(ctl.velocity(target, p[3]), yaw_rate_to(p[3], wall_yaw))
+            a.send_velocity(keep_off_walls(p, ctl.velocity(target, p[3]), float(a.p['min_wall_distance'])),
+                            yaw_rate_to(p[3], wall_yaw))
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')

@@ -34,9 +34,11 @@ class SensedObjects:
     def on_msg(self, msg: ObjectDetectionList) -> None:
         """Split holes (converted to the body frame) and fires."""
         a = self.task.agent
-        now = a.backend.now()
         holes = []
+        now = a.backend.now()
         for d in msg.objects:
+            # age from the image stamp: a detector lagging on a busy CPU must not steer with old images
+            stamp = d.header.stamp.to_sec() or msg.stamp.to_sec() or now
             p = d.pose.pose.position
             if not all(map(math.isfinite, (p.x, p.y, p.z))):
                 a.backend.logerr_throttle(5.0, 'sensed_objects: NaN position, ignored')
@@ -49,10 +51,10 @@ class SensedObjects:
                 r = d.relative_position
                 with self.lock:
                     self.fire = ((p.x, p.y, p.z), (r.x, r.y, r.z), d.image_detection.camera_direction)
-                    self.fire_time = now
+                    self.fire_time = stamp
         if holes:
             with self.lock:
-                self.holes, self.holes_time = holes, now
+                self.holes, self.holes_time = holes, stamp
 
     def _to_body(self, frame: str, p) -> Optional[np.ndarray]:
         frame = frame.lstrip('/')
