@@ -50,10 +50,10 @@ for p in "${PKGS[@]}"; do
     rc=$?
     log="$RESULTS/${p}__$(basename "$t" .test).log"
     # rostest --text exits 0 even when test cases fail: judge from its summary (and a non-empty run).
-    sed 's/\x1b\[[0-9;]*m//g' "$log" | grep -q '^ \* RESULT: SUCCESS' || { [ $rc -eq 0 ] && rc=1; }
-    sed 's/\x1b\[[0-9;]*m//g' "$log" | grep -qE '^ \* TESTS: [1-9]' || { [ $rc -eq 0 ] && rc=1; }
-    secs=$(( $(date +%s) - start ))
     clean="$(sed 's/\x1b\[[0-9;]*m//g' "$log")"
+    grep -q '^ \* RESULT: SUCCESS' <<<"$clean" || { [ $rc -eq 0 ] && rc=1; }
+    grep -qE '^ \* TESTS: [1-9]' <<<"$clean" || { [ $rc -eq 0 ] && rc=1; }
+    secs=$(( $(date +%s) - start ))
     n_tests=$(grep -oE '^ \* TESTS: [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | tail -1); n_tests=${n_tests:-0}
     n_bad=$(grep -oE '^ \* (ERRORS|FAILURES): [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | awk '{s+=$1} END {print s+0}')
     n_bad=${n_bad:-0}
