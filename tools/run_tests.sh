@@ -18,28 +18,35 @@ passed=0; failed=0; failures=()
 unit_dirs=()
 [ $# -eq 0 ] && unit_dirs+=("$ROOT/tests")   # workspace-level checks
 for p in "${PKGS[@]}"; do [ -d "$SRC/$p/test/unit" ] && unit_dirs+=("$SRC/$p/test/unit"); done
-if ((${#unit_dirs[@]})); then
-  echo "=== unit tests: ${unit_dirs[*]#$ROOT/}"
-  python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$RESULTS/unit_$$.xml" "${unit_dirs[@]}" \
-    2>&1 | tee "$RESULTS/unit.log"
-  rc=${PIPESTATUS[0]}
-  n_pass=$(python - "$RESULTS/unit_$$.xml" <<'PY'
+# One pytest run per package: test modules of different packages may share a basename (test_geometry.py).
+for d in "${unit_dirs[@]}"; do
+  tag="$(basename "$(dirname "$(dirname "$d")")")"; [ "$d" = "$ROOT/tests" ] && tag=workspace
+  echo "=== unit tests: ${d#$ROOT/}"
+  xml="$RESULTS/unit_${tag}_$$.xml"
+  (cd "$d" && python -m pytest -q -p no:cacheprovider --timeout=300 --junitxml="$xml" .) \
+    > "$RESULTS/unit_${tag}.log" 2>&1
+  rc=$?
+  tail -1 "$RESULTS/unit_${tag}.log" | sed 's/^/    /'
+  counts=$(python - "$xml" 2>/dev/null <<'PY'
 import sys, xml.etree.ElementTree as ET
 r = ET.parse(sys.argv[1]).getroot(); s = r if r.tag == "testsuite" else r.find("testsuite")
 t, f, e, sk = (int(s.get(k, 0)) for k in ("tests", "failures", "errors", "skipped"))
 print(t - f - e - sk, f + e)
 PY
 )
-  read -r up uf <<<"$n_pass"
+  read -r up uf <<<"${counts:-0 0}"
   passed=$((passed + up)); failed=$((failed + uf))
-  if [ "$rc" -ne 0 ] && [ "$uf" -eq 0 ]; then failed=$((failed + 1)); failures+=("pytest exit $rc"); fi
-  [ "$uf" -gt 0 ] && failures+=("$uf unit test(s)")
-fi
+  if [ "$rc" -ne 0 ]; then
+    [ "$uf" -eq 0 ] && failed=$((failed + 1))
+    failures+=("unit tests of $tag"); sed -n '/= FAILURES =\|= ERRORS =/,$p' "$RESULTS/unit_${tag}.log" | tail -80
+  fi
+done
 
 # ---- rostest -------------------------------------------------------------------------------------
 isolate=()
 if unshare -n true 2>/dev/null; then isolate=(unshare -n sh -c 'ip link set lo up 2>/dev/null; exec "$@"' sh); fi
 for p in "${PKGS[@]}"; do
+  [ -n "${SKIP_ROSTEST:-}" ] && break   # SKIP_ROSTEST=1: unit tests only
   for t in "$SRC/$p"/test/*.test; do
     [ -e "$t" ] || continue
     name="$p/$(basename "$t")"
