@@ -141,7 +141,7 @@ class TestUavMotion(unittest.TestCase):
         state, res = run(2, 'hover', 'Hover', 30, duration=1.0)
         self.assertEqual(state, GoalStatus.ABORTED)
         self.assertIn('heartbeat', res.message)
-        # after ~return_home_timeout (15 s sim) it goes home (0, 0) and lands
+        # after ~return_home_timeout (8 s of wall time) it goes home (0, 0) and lands
         self.assertTrue(wait_wall(lambda: math.dist(self.sim.poses[2], (0, 0, 0)) < 0.5, 60),
                         f'not home: {self.sim.poses[2]}')
         # the heartbeat comes back: goals are accepted again

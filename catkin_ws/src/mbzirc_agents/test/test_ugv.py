@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""rostest with ual_sim: the UGV agent's bad goals, its planned go_to and search_indoor through the door."""
+"""rostest with ual_sim: the UGV agent's bad goals, its planned go_to and search_indoor through the door, and
+extinguish_indoor_fire putting out the ground-floor fire it found."""
 import math
 import unittest
 
@@ -65,6 +66,16 @@ class TestUgv(unittest.TestCase):
         p = obj.pose.pose.position
         self.assertLess(math.dist((p.x, p.y, p.z), (active.position.x, active.position.y, active.position.z)),
                         1.5)
+
+    def test_4_puts_out_the_indoor_fire(self):
+        """extinguish_indoor_fire on the found fire fills its container (ground truth /sim/fires)."""
+        self.assertEqual(len(getattr(self, 'found', [])), 1)
+        state, res = run(0, 'extinguish_indoor_fire', 'ExtinguishIndoorFire', 150, fire_id=self.found[0])
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        fires = rospy.wait_for_message('/sim/fires', FireStateArray, 10).fires
+        active = [f for f in fires if f.kind == 2 and f.floor == 0 and f.active][0]
+        self.assertTrue(active.extinguished, f'indoor fire progress {active.progress:.2f}: {res.message}')
+        self.assertEqual(self.crashed, [])
 
 
 if __name__ == '__main__':

@@ -33,6 +33,12 @@ class FireDetectorNode:
     def __init__(self) -> None:
         self.uav_id = str(rospy.get_param("~uav_id", C.DEFAULT_UAV_ID))
         self.frame_id = str(rospy.get_param("~frame_id", "arena"))
+        # Height of the thermal camera above the robot's pose origin (extension: 0 on a UAV, as the
+        # original assumed; a UGV carries it on a mast, and fires are placed from the camera, not the chassis).
+        self.camera_height = float(rospy.get_param("~camera_height", 0.0))
+        if not np.isfinite(self.camera_height):
+            rospy.logerr("fire_detector: ~camera_height is not finite, using 0")
+            self.camera_height = 0.0
         self.covariance = (
             float(rospy.get_param("~covariance_x", C.DEFAULT_COVARIANCE_X)),
             float(rospy.get_param("~covariance_y", C.DEFAULT_COVARIANCE_Y)),
@@ -75,7 +81,7 @@ class FireDetectorNode:
             rospy.logerr_throttle(THROTTLE_S, "fire_detector: non-finite ual/pose ignored")
             return
         with self.lock:
-            self.pose = ((p.x, p.y, p.z), yaw_from_quaternion(q.x, q.y, q.z, q.w))
+            self.pose = ((p.x, p.y, p.z + self.camera_height), yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
     def on_scan(self, msg: LaserScan) -> None:
         rng = front_laser_range(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,

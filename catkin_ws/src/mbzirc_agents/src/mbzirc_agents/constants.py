@@ -83,3 +83,8 @@ HOLD_HALF_SIZE = 1.0            # half side of the box held around a hovering UA
 POSITION_TOLERANCE = 0.2        # m, a go-to has arrived (the UAL stops within 0.1 m)
 YAW_TOLERANCE = 0.15            # rad
 FACADE_STANDOFF = 2.0           # m in front of a facade fire holder
+
+# extinguish_facade_fire safety (why: estimates that jump or drift flew UAVs into the wall)
+HOLE_JUMP_MAX = 1.5             # m: a hole position further than this from the locked one -> abort
+COLD_CHECKS = 3                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out
+SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)

@@ -61,9 +61,39 @@ class HoleCentering:
         e = self.error(hole_body)
         return abs(e[1]) <= self.tolerance and abs(e[2]) <= self.tolerance and abs(e[0]) <= self.depth_tolerance
 
-    def velocity(self, hole_body: Sequence[float], yaw: float) -> np.ndarray:
-        """World-frame velocity command that reduces the error."""
-        return body_to_world(saturate(self.gain * self.error(hole_body), self.vmax), yaw)
+    def velocity(self, hole_body: Sequence[float], yaw: float, front_range: float = math.inf,
+                 min_wall: float = 0.0) -> np.ndarray:
+        """World-frame velocity command that reduces the error.
+
+        Why front_range: the hole estimate may be metres off (decoys, a stale estimate) and would pull the
+        UAV into the facade; the laser range ahead says where the wall really is, so the forward set-point
+        (here + error along x) is clamped to stay at least min_wall from it (a negative error backs off).
+        """
+        e = self.error(hole_body)
+        if math.isfinite(front_range):
+            e[0] = min(e[0], front_range - min_wall)
+        return body_to_world(saturate(self.gain * e, self.vmax), yaw)
+
+
+def front_distance(ranges: Sequence[float], angle_min: float, angle_increment: float,
+                   half_width: float = 0.26) -> float:
+    """Distance ahead to the nearest return of a LaserScan within +-half_width rad of the front, as its
+    component along the heading (r cos a: the facade plane's distance when facing it). inf when no beam
+    there has a finite positive range (nothing ahead, or a scan without usable data).
+
+    Several beams, not only the front one: the front beam may pass through the hole being aimed at.
+    """
+    if not math.isfinite(angle_min) or not math.isfinite(angle_increment) or angle_increment <= 0:
+        return math.inf
+    r = np.asarray(ranges, dtype=float)
+    if r.size == 0:
+        return math.inf
+    a = angle_min + angle_increment * np.arange(r.size)
+    a = np.arctan2(np.sin(a), np.cos(a))
+    ok = (np.abs(a) <= half_width) & np.isfinite(r) & (r > 0)
+    if not ok.any():
+        return math.inf
+    return float(np.min(r[ok] * np.cos(a[ok])))
 
 
 def thermal_pixel_to_ground(u: float, v: float, height: float, width_px: int = 32, height_px: int = 32,

@@ -3,6 +3,8 @@
 Why: if the central unit dies, an agent must not keep pumping or flying a stale plan. The agent feeds
 `beat(now)` from `/central_unit/heartbeat` and calls `update(now)` at a fixed rate; the watchdog tells it
 which safe reaction is due. Before the first heartbeat nothing is lost (an agent may run alone).
+The agent passes wall-clock (monotonic) times, not ROS time: /clock comes from the ground station and
+stops with the link, so a ROS-time watchdog would never fire.
 """
 from __future__ import annotations
 

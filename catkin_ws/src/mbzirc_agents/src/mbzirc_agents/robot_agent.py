@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any, Dict, Optional, Sequence
 
 import numpy as np
@@ -90,6 +91,11 @@ class RobotAgent(Agent):
                                              float(self.p['return_home_timeout']))
         self._went_home = False
         self._home_request = None
+        # Why wall time: /clock comes from the simulator on the ground station; when the link is cut the
+        # robot's ROS time stops too, so a ROS-time watchdog would never fire. Injectable for tests.
+        self.wall_clock = time.monotonic
+        self._watchdog_stop = threading.Event()
+        self._watchdog_thread: Optional[threading.Thread] = None
         self.parked = False                # a 'parked' region is held while landed
         self._last_park_try = -1e9
         ifc = self.iface
@@ -114,6 +120,9 @@ class RobotAgent(Agent):
     def start(self) -> None:
         """Start the agent; drop regions a previous run of this agent (killed, respawned) left behind."""
         super().start()
+        self._watchdog_thread = threading.Thread(target=self._watchdog_loop, name='heartbeat_watchdog',
+                                                 daemon=True)
+        self._watchdog_thread.start()
         if self.p['use_regions']:
             try:
                 self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, free_all=True))
@@ -148,12 +157,25 @@ class RobotAgent(Agent):
             self.objects = {int(o.id): o for o in msg.objects}
 
     def _on_heartbeat(self, _msg: Header) -> None:
-        self.watchdog.beat(self.backend.now())
+        self.watchdog.beat(self.wall_clock())
 
     # ---- data feed + heartbeat watchdog -----------------------------------------------------------
     def _on_timer(self, _event: Any = None) -> None:
-        self._watch_heartbeat()
         self.feed_pub.publish(self.data_feed())
+
+    def _watchdog_loop(self) -> None:
+        """The watchdog at DATA_FEED_RATE_HZ on the wall clock (a WallTimer: runs when /clock stops)."""
+        period = 1.0 / C.DATA_FEED_RATE_HZ
+        while not self._watchdog_stop.wait(period) and not self.backend.is_shutdown():
+            try:
+                self._watch_heartbeat()
+            except Exception as e:             # never let the watchdog thread die
+                self.backend.logerr_throttle(5.0, f'heartbeat watchdog: {e}')
+
+    def shutdown(self) -> None:
+        """Stop the watchdog thread, then the agent (Ctrl+C)."""
+        self._watchdog_stop.set()
+        super().shutdown()
 
     def data_feed(self) -> AgentDataFeed:
         """The agent's state for the central unit (and its heartbeat)."""
@@ -180,7 +202,7 @@ class RobotAgent(Agent):
         return rospy.Time.from_sec(self.backend.now())
 
     def _watch_heartbeat(self) -> None:
-        state = self.watchdog.state(self.backend.now())
+        state = self.watchdog.state(self.wall_clock())
         if state == hb.OK:
             if not self.accepting:
                 self.backend.logwarn('central unit heartbeat back: accepting goals again')

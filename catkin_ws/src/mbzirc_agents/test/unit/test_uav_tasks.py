@@ -155,23 +155,62 @@ def test_data_feed_and_cost(uav):
     assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=pose(float('nan'), 4, 0))).cost == -1
 
 
+def _beating(agent, period=0.1):
+    """A central unit sending heartbeats until the returned event is set."""
+    import threading
+    stop = threading.Event()
+
+    def loop():
+        while not stop.wait(period):
+            agent._on_heartbeat(None)
+    agent._on_heartbeat(None)
+    threading.Thread(target=loop, daemon=True).start()
+    return stop
+
+
 def test_heartbeat_loss_aborts_task_and_rejects_goals(uav):
     agent, ual, be = uav
     agent.watchdog.timeout = 0.3
     agent.watchdog.return_home_timeout = 100
-    agent._on_heartbeat(None)
+    beat = _beating(agent)
     assert take_off(be) == 'succeeded'
-    agent._on_heartbeat(None)
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
     time.sleep(0.2)
-    for _ in range(10):          # the node's 10 Hz timer
-        agent._on_timer()
-        time.sleep(0.1)
+    beat.set()                               # the central unit dies; the agent's own watchdog notices
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
     s.send(GoToGoal(waypoint=pose(0, 0, 3)))
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
-    agent._on_heartbeat(None)
-    agent._on_timer()
+    beat = _beating(agent)
+    deadline = time.monotonic() + 2.0        # the agent's 10 Hz wall-clock watchdog sees it
+    while not agent.accepting and time.monotonic() < deadline:
+        time.sleep(0.05)
     s.send(GoToGoal(waypoint=pose(0, 0, 3)))
     assert s.wait(10) == 'succeeded'
+    beat.set()
+
+
+def test_heartbeat_watchdog_runs_on_wall_clock_when_ros_time_stops(uav):
+    """The link is cut: /clock stops with it (ROS time frozen), yet the loss must be detected."""
+    agent, ual, be = uav
+    frozen = be.now()
+    be.now = lambda: frozen                  # the robot's ROS time no longer advances
+    agent.watchdog.timeout = 0.3
+    agent.watchdog.return_home_timeout = 0.5
+    homes = []
+    agent.return_home = lambda: homes.append(time.monotonic()) or None
+    agent._on_heartbeat(None)
+    assert agent.accepting
+    deadline = time.monotonic() + 3.0        # no manual timer calls: the agent's own wall-clock watchdog
+    while agent.accepting and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not agent.accepting and 'heartbeat' in agent.reject_reason
+    deadline = time.monotonic() + 3.0        # the return_home_timeout countdown runs on wall time too
+    while not homes and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert homes
+    agent._on_heartbeat(None)
+    deadline = time.monotonic() + 2.0
+    while not agent.accepting and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert agent.accepting

@@ -31,8 +31,13 @@ UAV_BODY_OFFSET_Z = 0.15   # m
 UGV_RADIUS = 0.6           # m (must fit through a 2.5 m door)
 UGV_BODY_OFFSET_Z = 0.5    # m
 UGV_HEIGHT = 1.0           # m
-UGV_SENSOR_Z = 0.8         # m: the UGV's laser, thermal and RGB-D sit this high above base_link
-UGV_NOZZLE_Z = 1.5         # m: the UGV's nozzle on a mast, level with the indoor fires (1.5 m above the floor)
+INDOOR_HOLE_Z = 1.5        # m: indoor fire holes sit this high above their floor (worlds/c3_default.yaml)
+# The UGV's mast: its FORWARD thermal camera, RGB-D camera and nozzle sit at the indoor hole height, so that
+# parked 1.5-2.5 m in front of an indoor fire, facing it, the hot ring is near the thermal image centre and
+# the level jet enters the hole (a camera at 0.8 m saw it only in its top rows, off-centre).
+UGV_MAST_Z = INDOOR_HOLE_Z  # m above base_link: thermal_link and camera_color_optical_frame
+UGV_NOZZLE_Z = UGV_MAST_Z  # m above base_link: the nozzle on the same mast
+UGV_LASER_Z = 0.8          # m above base_link: the 2D laser stays low on the chassis (below the 1.5 m sills)
 
 # --- water and blanket ---
 TANK_LITRES = 2.0          # L per refill

@@ -327,13 +327,13 @@ class RobotIO:
         """base_link -> laser_link, thermal_link, camera_color_optical_frame (REP 103 optical)."""
         out = []
 
-        def add(child: str, xyz, q: Quaternion) -> None:
+        def add(child: str, xyz, q: Quaternion, dz: float | None = None) -> None:
             t = TransformStamped()
             t.header.stamp, t.header.frame_id, t.child_frame_id = stamp, self.frame, f"{self.ns}/{child}"
-            t.transform.translation = Vector3(xyz[0], xyz[1], xyz[2] + self.r.sensor_z)
+            t.transform.translation = Vector3(xyz[0], xyz[1], xyz[2] + (self.r.sensor_z if dz is None else dz))
             t.transform.rotation = q
             out.append(t)
-        add("laser_link", C.LASER_OFFSET, Quaternion(0, 0, 0, 1))
+        add("laser_link", C.LASER_OFFSET, Quaternion(0, 0, 0, 1), self.r.laser_z)
         if self.thermal_dir == DOWNWARD:
             add("thermal_link", C.THERMAL_OFFSET_DOWNWARD, Quaternion(0, math.sqrt(0.5), 0, math.sqrt(0.5)))
         else:

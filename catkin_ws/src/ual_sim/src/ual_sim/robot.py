@@ -55,7 +55,8 @@ class Robot:
         self.max_vxy = C.UAV_MAX_VXY if self.is_uav else C.UGV_MAX_V
         self.max_vz = C.UAV_MAX_VZ if self.is_uav else 0.0
         self.max_wz = C.UAV_MAX_YAW_RATE if self.is_uav else C.UGV_MAX_YAW_RATE
-        self.sensor_z = 0.0 if self.is_uav else C.UGV_SENSOR_Z
+        self.sensor_z = 0.0 if self.is_uav else C.UGV_MAST_Z      # thermal and RGB-D cameras
+        self.laser_z = 0.0 if self.is_uav else C.UGV_LASER_Z      # 2D laser (UGV: low on the chassis)
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -70,7 +71,7 @@ class Robot:
         return self.pos + np.array([0.0, 0.0, self.body_offset])
 
     def sensor_base(self) -> np.ndarray:
-        """Where the sensor mounts are measured from: base_link, raised on the UGV."""
+        """Where the camera mounts (thermal, RGB-D) are measured from: base_link, on the UGV the mast top."""
         return self.pos + np.array([0.0, 0.0, self.sensor_z])
 
     def comm_ok(self, now: float) -> bool:

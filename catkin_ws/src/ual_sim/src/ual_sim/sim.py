@@ -196,7 +196,7 @@ class Simulation:
         return frame
 
     def laser(self, r: Robot) -> np.ndarray:
-        lz = r.pos[2] + r.sensor_z + C.LASER_OFFSET[2]
+        lz = r.pos[2] + r.laser_z + C.LASER_OFFSET[2]
         return self._cached(r, "laser", lambda: self.world.laser_scan(r.pos[0], r.pos[1], lz, r.yaw))
 
     def thermal_frame(self, r: Robot, direction: int) -> np.ndarray:

@@ -8,6 +8,7 @@ from ual_sim import constants as C
 from ual_sim.effects import disc_overlap
 from ual_sim.fires import FireSet
 from ual_sim.sim import Simulation
+from ual_sim.thermal import FORWARD
 from ual_sim.world import load_world
 
 DT = 1.0 / 30.0
@@ -279,16 +280,35 @@ def test_markers_cover_world_robots_fires():
     assert sum(m.ns == "fires" for m in ma.markers) == len(s.fires.fires)
 
 
-def test_ugv_puts_out_ground_floor_indoor_fire(sim):
+@pytest.mark.parametrize("dist", [1.5, 2.0, 2.5])
+def test_ugv_sees_and_puts_out_ground_floor_indoor_fire(sim, dist):
+    """UGV parked `dist` m (nozzle to wall) in front of the indoor fire, facing it: its mast puts the hot ring
+    near the centre of the FORWARD thermal image and the level jet fills the container."""
     u = sim.robots[0]
     f = sim.fires.by_id("in0_w")                       # (17.7, 8.5, 1.5) facing -x, west room of the ground floor
     f.active = True
-    for goal, yaw in (((14.25, 3.0), math.pi / 2), ((14.25, 8.5), 0.0), ((17.7 - 2.3, 8.5), 0.0)):
+    x = 17.7 - dist - C.NOZZLE_OFFSET[0]
+    for goal, yaw in (((14.25, 3.0), math.pi / 2), ((14.25, 8.5), 0.0), ((x, 8.5), 0.0)):
         assert u.go_to(goal[0], goal[1], 0.0, yaw)[0]
         assert run_until(sim, u.goal_reached, 60.0)
     assert not u.crashed
+    frame = sim.thermal_frame(u, FORWARD)               # with sensor noise
+    assert frame.shape == (C.THERMAL_SIZE, C.THERMAL_SIZE)
+    hot = np.argwhere(frame > 100.0)                    # flame ring (and heater) pixels; walls are < 50
+    assert len(hot) >= 20
+    centre = (C.THERMAL_SIZE - 1) / 2.0
+    assert np.abs(hot.mean(axis=0) - centre).max() < 2.0, hot.mean(axis=0)   # ring centred in the image
+    peak = np.unravel_index(np.argmax(frame), frame.shape)
+    assert np.abs(np.array(peak) - centre).max() < 0.5 * C.THERMAL_SIZE / 2  # hottest pixel in the middle half
+    # the ring is hot all round: pixels above, below, left and right of the centre
+    assert (hot[:, 0] < centre).any() and (hot[:, 0] > centre).any()
+    assert (hot[:, 1] < centre).any() and (hot[:, 1] > centre).any()
+    water0 = u.water
     sim.start_pump(0)
     assert run_until(sim, lambda: f.extinguished, 20.0)
+    assert f.litres >= C.LITRES_PER_FIRE
+    assert water0 - u.water == pytest.approx(C.LITRES_PER_FIRE, abs=0.05)   # the whole jet entered the hole
+    assert sim.thermal_frame(u, FORWARD).max() < 60.0   # and the camera sees it out
 
 
 def test_uav_enters_first_floor_through_window():

@@ -10,9 +10,10 @@ import math
 from typing import Optional
 
 import numpy as np
+from sensor_msgs.msg import LaserScan
 
 from .. import constants as C
-from ..control import HoleCentering, pick_hole, world_to_body, yaw_rate_to
+from ..control import HoleCentering, body_to_world, front_distance, pick_hole, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall, nearest_face
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
@@ -156,18 +157,42 @@ class GoToFacadeFire(AgentTask):
 
 
 class ExtinguishFacadeFire(AgentTask):
-    """Centre the hole at the nozzle (circle detector), pump while centred until cold or empty."""
+    """Centre the hole at the nozzle (circle detector), pump while centred until cold or empty.
+
+    Safety: the forward set-point never comes closer than `~min_wall_distance` to what the laser sees
+    ahead (`scan`); once a hole is seen it is locked (its arena position) and a later hole further than
+    C.HOLE_JUMP_MAX from it aborts the task instead of being chased; the pump stops when the thermal
+    camera answers "no fire" C.COLD_CHECKS times in a row (the fire cools while the container fills).
+    """
     INPUT_KEYS = ['fire_id']
 
     def __init__(self, name, agent, **args) -> None:
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
+        self.locked_hole: Optional[np.ndarray] = None
+        self._front = (math.inf, -1e9)          # (laser distance ahead m, receive time)
+        self.iface.add_subscriber(self.name, 'scan', LaserScan, self._on_scan)
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        """Keep the distance ahead; a malformed scan is reported and ignored."""
+        if (not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment)
+                or msg.angle_increment <= 0):
+            self.agent.backend.logerr_throttle(5.0, 'scan: empty or bad angles, ignored')
+            return
+        self._front = (front_distance(msg.ranges, msg.angle_min, msg.angle_increment),
+                       self.agent.backend.now())
+
+    def front_range(self) -> float:
+        """Laser distance to the wall ahead (inf when no fresh scan says so)."""
+        d, t = self._front
+        return d if self.agent.backend.now() - t <= C.SCAN_MAX_AGE else math.inf
 
     def run(self, ud) -> str:
         a = self.agent
         if a.water_empty():
             raise TaskError('tank empty: go home and refill first')
         fire = np.array(fire_position(a, ud.fire_id))
+        self.locked_hole = None
         ctl = HoleCentering(shoot_distance=float(a.p['shoot_distance']))
         pos, wall_yaw = facade_standoff(fire, C.BUILDINGS, ctl.shoot_distance)
         self.feedback('APPROACHING', f'to {ctl.shoot_distance:.1f} m in front of fire {ud.fire_id}')
@@ -190,14 +215,29 @@ class ExtinguishFacadeFire(AgentTask):
         """Body-frame aim point and where it comes from: hole > own fire detection > estimate."""
         p = self.agent.position()
         holes = self.sensed.recent_holes(1.0)    # sim s: the circle detector runs at a few Hz on a busy CPU
+        if self.locked_hole is not None:
+            # track the locked hole: never fall back to the (maybe metres off) estimate again
+            if holes:
+                worlds = [p[:3] + body_to_world(h, p[3]) for h, _ in holes]
+                jumps = [float(np.linalg.norm(w - self.locked_hole)) for w in worlds]
+                i = int(np.argmin(jumps))
+                if jumps[i] > C.HOLE_JUMP_MAX:
+                    raise TaskError(f'hole estimate jumped {jumps[i]:.1f} m (> {C.HOLE_JUMP_MAX} m): '
+                                    'not chasing it near the wall')
+                self.locked_hole = worlds[i]
+                return np.asarray(holes[i][0], dtype=float), 'hole'
+            return world_to_body(self.locked_hole - p[:3], p[3]), 'last hole'
         if holes:
             expected = world_to_body(fire - p[:3], p[3])
             middle = choose_hole(holes)
-            if middle is not None and np.linalg.norm(middle[1:] - expected[1:]) < 1.0:
+            if middle is None or np.linalg.norm(middle[1:] - expected[1:]) >= 1.0:
+                middle = min((h for h, _ in holes), key=lambda h: np.linalg.norm(h[1:] - expected[1:]))
+                if np.linalg.norm(middle[1:] - expected[1:]) >= 0.5:
+                    middle = None
+            if middle is not None:
+                middle = np.asarray(middle, dtype=float)
+                self.locked_hole = p[:3] + body_to_world(middle, p[3])
                 return middle, 'hole'
-            best = min((h for h, _ in holes), key=lambda h: np.linalg.norm(h[1:] - expected[1:]))
-            if np.linalg.norm(best[1:] - expected[1:]) < 0.5:
-                return best, 'hole'
         det = self.sensed.recent_fire(0.5)
         if det is not None and det[2] == C.CAMERA_FORWARD:
             return np.array(det[1]), 'thermal'
@@ -210,7 +250,7 @@ class ExtinguishFacadeFire(AgentTask):
         centred_once = False
         pumping_since = None
         last_centred = -1e9
-        cold_since = None
+        cold_checks = 0
         last_check = -1e9
         while True:
             self.check_preempt()
@@ -229,19 +269,21 @@ class ExtinguishFacadeFire(AgentTask):
             elif pumping_since is not None and now - last_centred > 1.0:
                 a.stop_pump()                           # off target: do not waste water
                 pumping_since = None
-            a.send_velocity(keep_off_walls(p, ctl.velocity(target, p[3]), float(a.p['min_wall_distance'])),
-                            yaw_rate_to(p[3], wall_yaw))
+            min_wall = float(a.p['min_wall_distance'])
+            v = ctl.velocity(target, p[3], self.front_range(), min_wall)
+            a.send_velocity(keep_off_walls(p, v, min_wall), yaw_rate_to(p[3], wall_yaw))
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
             if a.water_empty():
                 return a.fire_detected() is False
-            if pumping_since is not None and now - pumping_since > 2.0 and now - last_check > 0.5:
+            if centred_once and now - last_check >= 0.5:   # once water flowed: is the fire still hot?
                 last_check = now
-                if a.fire_detected() is False:
-                    cold_since = cold_since or now
-                    if now - cold_since >= 1.0:
-                        return True
-                else:
-                    cold_since = None
+                hot = a.fire_detected()
+                if hot is False:
+                    cold_checks += 1
+                    if cold_checks >= C.COLD_CHECKS:
+                        return True                     # cold: stop pumping, keep the rest of the tank
+                elif hot:
+                    cold_checks = 0                     # None (detector silent): no evidence either way
             a.backend.sleep(dt)
