@@ -28,7 +28,14 @@ def client(robot, task, action, wait=60.0):
 def run(robot, task, action, wall_timeout=120.0, feedback=None, **fields):
     """Send a goal and wait for it (wall-time cap); returns (GoalStatus, result)."""
     c = client(robot, task, action)
-    c.send_goal(getattr(M, f'{action}Goal')(**fields), feedback_cb=feedback)
+    goal = getattr(M, f'{action}Goal')(**fields)
+    # actionlib's wait_for_server() can return before the server's goal subscriber has connected to our
+    # publisher, and a goal sent in that gap is silently lost (a known race, seen on a loaded machine).
+    # A goal that nobody acknowledged (no status at all) within 5 s is therefore sent again, at most twice.
+    for _ in range(3):
+        c.send_goal(goal, feedback_cb=feedback)
+        if wait_wall(lambda: c.simple_state != actionlib.SimpleGoalState.PENDING, 5.0):
+            break
     if not wait_wall(lambda: done(c), wall_timeout):
         c.cancel_goal()
         raise AssertionError(f'{task} of {robot} did not finish in {wall_timeout} s')

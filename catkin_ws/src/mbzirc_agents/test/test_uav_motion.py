@@ -135,8 +135,11 @@ class TestUavMotion(unittest.TestCase):
         self.assertTrue(wait_wall(lambda: done(g), 30))
         self.assertEqual(g.get_state(), GoalStatus.ABORTED)
         self.assertIn('heartbeat', g.get_result().message)
+        # let it brake (1 s of wall time is 5 s of sim time at rtf 5), then it must stay put: still flying
+        # its go_to it would cover about 8 m in the next second
+        time.sleep(1.0)
         p = self.sim.poses[2]
-        time.sleep(0.5)
+        time.sleep(1.0)
         self.assertLess(math.dist(self.sim.poses[2], p), 0.5, 'not holding after the loss')
         state, res = run(2, 'hover', 'Hover', 30, duration=1.0)
         self.assertEqual(state, GoalStatus.ABORTED)
