@@ -15,18 +15,15 @@
 
 Writes bench/results/agents.json. Usage: bench_agents.py [--quick]
 """
-import json
 import math
-import os
 import sys
 import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-SRC = os.path.join(HERE, '..', 'catkin_ws', 'src')
-sys.path[:0] = [os.path.join(SRC, 'mbzirc_agents', 'src'), os.path.join(SRC, 'smach', 'src'),
-                os.path.join(SRC, 'mbzirc_agents', 'test', 'unit')]
+from _common import use_sources, write_result
+
+use_sources('mbzirc_agents/src', 'smach/src', 'mbzirc_agents/test/unit')
 
 from mbzirc_agents import constants as C  # noqa: E402
 from mbzirc_agents.estimator_core import Detection, ObjectEstimator  # noqa: E402
@@ -181,10 +178,7 @@ def main() -> None:
     logging.disable(logging.INFO)
     res = {'estimator': bench_estimator(), 'regions': bench_regions(), 'planner': bench_planner(),
            'framework': bench_framework(), 'quick': QUICK}
-    os.makedirs(os.path.join(HERE, 'results'), exist_ok=True)
-    with open(os.path.join(HERE, 'results', 'agents.json'), 'w') as fh:
-        json.dump(res, fh, indent=2)
-    print('wrote bench/results/agents.json')
+    write_result('agents', res)
 
 
 if __name__ == '__main__':

@@ -17,21 +17,16 @@ true hole centre. Frames/s: one core (OpenCV and BLAS single-threaded), the node
 Writes bench/results/detectors.json. Usage: bench_detectors.py [--quick]
 """
 import os
+import sys
+import time
 
-for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_v] = "1"
+from _common import SRC, single_threaded, use_sources, write_result
 
-import json  # noqa: E402
-import math  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
+single_threaded()
+use_sources("fire_detector/src", "circle_detector/src")
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-SRC = os.path.join(HERE, "..", "catkin_ws", "src")
-sys.path[:0] = [os.path.join(SRC, "fire_detector", "src"), os.path.join(SRC, "circle_detector", "src")]
 
 from circle_detector import synthetic as CS  # noqa: E402
 from circle_detector.hole_choice import choose_middle_hole  # noqa: E402
@@ -208,9 +203,7 @@ def main() -> None:
         "circle_fps>=30": res["circle_detector_fps_one_core_640x480"] >= 30.0,
     }
     res["seconds"] = time.time() - t_start
-    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
-    with open(os.path.join(HERE, "results", "detectors.json"), "w") as f:
-        json.dump(res, f, indent=1)
+    write_result("detectors", res, indent=1)
     for mode in ("FORWARD", "DOWNWARD"):
         print(f"fire {mode}:")
         for band, r in res["fire"][mode].items():

@@ -19,19 +19,14 @@ Writes bench/results/hector.json.
 from __future__ import annotations
 
 import os
+import time
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
+from _common import load_average_1min, single_threaded, use_sources, write_result
 
-import json  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
+single_threaded()
+use_sources("hector_mapping/src")
 
 import numpy as np  # noqa: E402
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "catkin_ws", "src", "hector_mapping", "src"))
 
 from hector_mapping import indoor, sim2d  # noqa: E402
 from hector_mapping.geometry import transform_points  # noqa: E402
@@ -181,17 +176,14 @@ def main() -> None:
         "worst_ate_rms_m": worst_ate,
         "ate_target_m": 0.05,
         "wall_time_s": round(time.time() - t0, 1),
-        "load_average_1min_at_end": round(os.getloadavg()[0], 1),
+        "load_average_1min_at_end": load_average_1min(),
     }
     print(f"worst ATE rms over all runs: {worst_ate:.4f} m (target < 0.05); worst start-aligned rms: "
           f"{max(acc_slow['worst']['start_aligned_rms'], acc_fast['worst']['start_aligned_rms']):.4f} m")
     print(f"original matching lost track in {acc_fast['original_matching']['lost']} of "
           f"{acc_fast['original_matching']['of']} fast runs; ours in "
           f"{sum(r['ate_rms'] > LOST for r in acc_fast['runs'])}")
-    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
-    with open(os.path.join(HERE, "results", "hector.json"), "w") as f:
-        json.dump(result, f, indent=1)
-    print("wrote bench/results/hector.json")
+    write_result("hector", result, indent=1)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from _common import ROOT, write_result
 
 
 def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
@@ -59,9 +59,7 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
                                             "min_separation_m", "error")} for r in runs],
     }
     res["seeds_requested"] = args.seeds
-    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
-    with open(os.path.join(ROOT, "bench", "results", "mission.json"), "w", encoding="utf-8") as f:
-        json.dump(res, f, indent=2)
+    write_result("mission", res, say=False)
     return res
 
 

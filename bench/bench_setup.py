@@ -4,11 +4,12 @@
 The first run (apt, venv, catkin_make) takes minutes; later ones must take seconds. This measures the
 no-op run a few times and reports the median, next to one build of the workspace for the ratio.
 """
-import json
 import pathlib
 import statistics
 import subprocess
 import time
+
+from _common import write_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -29,8 +30,7 @@ def main():
               "ratio_rebuild_over_noop": round(rebuild / statistics.median(noop), 1)}
     print(f"setup with nothing changed: {result['noop_setup_s']} s (median of 3); "
           f"catkin rebuild: {result['catkin_rebuild_s']} s")
-    out = ROOT / "bench" / "results" / "setup.json"
-    out.write_text(json.dumps(result, indent=2))
+    write_result("setup", result)
 
 
 if __name__ == "__main__":

@@ -9,14 +9,14 @@ Figures (all measured in this run):
 Writes bench/results/smach.json.
 """
 import json
-import os
 import statistics
 import time
 
 import smach
 from smach_ros.userdata_codec import decode_local_data, encode_local_data
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+from _common import write_result
+
 N_TRANSITIONS = 20000
 
 
@@ -101,9 +101,7 @@ def main():
     quiet()
     out = {"transitions": bench_transitions(), "concurrence": bench_concurrence(), "codec": bench_codec()}
     print(json.dumps(out, indent=2))
-    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
-    with open(os.path.join(HERE, "results", "smach.json"), "w") as f:
-        json.dump(out, f, indent=2)
+    write_result("smach", out)
 
 
 if __name__ == "__main__":

@@ -24,8 +24,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-RESULTS = os.path.join(ROOT, "bench", "results")
+from _common import RESULTS, load_average_1min, load_averages, write_result
 
 
 # ---------------------------------------------------------------------------------------- part A
@@ -113,7 +112,7 @@ class Scenario:
             per_topic = {t: round(n / sim_s, 2) if sim_s > 0 else 0.0 for t, n in got.items()}
             rates = sorted(per_topic.values())
             return {"rtf": round(factor, 2), "window_wall_s": round(wall, 1), "topics": len(topics),
-                    "load_average_1min": round(os.getloadavg()[0], 1),
+                    "load_average_1min": load_average_1min(),
                     "min_rate_per_sim_s": rates[0] if rates else None,
                     "slowest_topic": min(per_topic, key=per_topic.get) if per_topic else None,
                     "max_rate_per_sim_s": rates[-1] if rates else None}
@@ -231,15 +230,14 @@ def main() -> int:
         with open(args.partial) as f:
             ros = json.load(f)
         os.remove(args.partial)
-    result = {"cpu_ms_per_frame": cpu, **ros, "load_average_1_5_15": [round(x, 2) for x in os.getloadavg()],
+    result = {"cpu_ms_per_frame": cpu, **ros, "load_average_1_5_15": load_averages(),
               "targets": {"lasers_thermals_rtf": 10.0, "with_rgbd_rtf": 3.0, "fleet_real_time": 50}}
     if ros and not args.only:
         result["meets"] = {"lasers_thermals": ros["lasers_thermals"]["rtf"] >= 10.0,
                            "with_rgbd": ros["lasers_thermals_rgbd"]["rtf"] >= 3.0,
                            "fleet_50": ros["largest_fleet_real_time"] >= 50}
     if not args.only:   # a partial run does not overwrite the benchmark's result
-        with open(os.path.join(RESULTS, "ual_sim.json"), "w") as f:
-            json.dump(result, f, indent=2)
+        write_result("ual_sim", result)
     print(json.dumps(result.get("meets", {})))
     return rc
 

@@ -6,8 +6,6 @@ detections and the chosen middle hole against the scene, then survives malformed
 ~mode "self": nothing else publishes; the test sends images before any camera_info (no output, node
 alive), then camera_info and images (detections appear).
 """
-import sys
-import threading
 import time
 import unittest
 
@@ -16,31 +14,12 @@ import rospy
 import rostest
 from geometry_msgs.msg import PointStamped
 from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
+from mbzirc_test_utils.collector import Collector, agent_id
 from sensor_msgs.msg import CameraInfo, Image
 
 from circle_detector import synthetic as S
 
 PKG = "circle_detector"
-
-
-class Collector:
-    def __init__(self, topic, cls):
-        self.msgs, self.lock = [], threading.Lock()
-        self.sub = rospy.Subscriber(topic, cls, self.cb, queue_size=50)
-
-    def cb(self, msg):
-        with self.lock:
-            self.msgs.append(msg)
-
-    def count(self):
-        with self.lock:
-            return len(self.msgs)
-
-    def wait(self, n, timeout):
-        end = time.time() + timeout
-        while time.time() < end and self.count() < n and not rospy.is_shutdown():
-            time.sleep(0.05)
-        return self.count() >= n
 
 
 def image(arr, encoding, frame_id, stamp):
@@ -82,7 +61,7 @@ class TestCircleDetectorSynthetic(unittest.TestCase):
             return
         self.assertTrue(self.holes.wait(5, 20.0))
         for lst in list(self.dets.msgs):
-            self.assertEqual(lst.agent_id, self.ns.rsplit("_", 1)[-1])
+            self.assertEqual(lst.agent_id, agent_id(self.ns))
             self.assertEqual(len(lst.objects), 3)
             for o in lst.objects:
                 self.assertEqual(o.type, ObjectDetection.TYPE_HOLE)

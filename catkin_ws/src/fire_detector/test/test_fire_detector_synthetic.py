@@ -7,7 +7,6 @@ fire), CheckFire, the debug topic, and that malformed inputs are survived.
 """
 import math
 import sys
-import threading
 import time
 import unittest
 
@@ -16,32 +15,13 @@ import rospy
 import rostest
 from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList, ThermalImage
 from mbzirc_comm_objs.srv import CheckFire
+from mbzirc_test_utils.collector import Collector, agent_id
 from sensor_msgs.msg import LaserScan, Temperature
 from std_msgs.msg import Float64MultiArray
 
 from fire_detector import synthetic as S
 
 PKG = "fire_detector"
-
-
-class Collector:
-    def __init__(self, topic, cls):
-        self.msgs, self.lock = [], threading.Lock()
-        self.sub = rospy.Subscriber(topic, cls, self.cb, queue_size=50)
-
-    def cb(self, msg):
-        with self.lock:
-            self.msgs.append(msg)
-
-    def count(self):
-        with self.lock:
-            return len(self.msgs)
-
-    def wait(self, n, timeout):
-        end = time.time() + timeout
-        while time.time() < end and self.count() < n and not rospy.is_shutdown():
-            time.sleep(0.05)
-        return self.count() >= n
 
 
 class TestFireDetectorSynthetic(unittest.TestCase):
@@ -51,7 +31,7 @@ class TestFireDetectorSynthetic(unittest.TestCase):
         cls.scene_name = rospy.get_param("~scene")
         cls.expect_fire = bool(rospy.get_param("~expect_fire"))
         cls.scene = S.NAMED_SCENES[cls.scene_name]
-        cls.ns_id = rospy.get_namespace().strip("/").rsplit("_", 1)[-1]
+        cls.ns_id = agent_id(rospy.get_namespace())
         cls.dets = Collector("sensed_objects", ObjectDetectionList)
         cls.debug = Collector("thermal_detection/debug", Temperature)
         rospy.wait_for_service("thermal_detection/fire_detected", timeout=30)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from typing import Iterable, Optional, Sequence
+from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
 
@@ -164,9 +164,13 @@ def path_length(points: Sequence[Sequence[float]]) -> float:
     return float(sum(np.linalg.norm(np.subtract(b, a)) for a, b in zip(points[:-1], points[1:])))
 
 
-def _segment_hits_rect(a, b, rect) -> bool:
-    """True when segment a-b crosses the open rectangle (x0, y0, x1, y1) (Liang-Barsky clipping)."""
-    x0, y0, x1, y1 = rect
+def segment_hits_rect(a, b, rect, shrink: float = 0.0) -> bool:
+    """True when segment a-b crosses the open rectangle (x0, y0, x1, y1) (Liang-Barsky clipping).
+
+    `shrink` > 0 tests against the rectangle made smaller by that much on every side, so that a segment
+    that only runs along (or ends on) the border does not count as crossing it despite rounding.
+    """
+    x0, y0, x1, y1 = rect[0] + shrink, rect[1] + shrink, rect[2] - shrink, rect[3] - shrink
     dx, dy = b[0] - a[0], b[1] - a[1]
     t0, t1 = 0.0, 1.0
     for p, q in ((-dx, a[0] - x0), (dx, x1 - a[0]), (-dy, a[1] - y0), (dy, y1 - a[1])):
@@ -180,6 +184,44 @@ def _segment_hits_rect(a, b, rect) -> bool:
             else:
                 t1 = min(t1, t)
     return t1 - t0 > 1e-9
+
+
+_segment_hits_rect = segment_hits_rect  # the former private name, still used by tests
+
+
+def shortest_path(nodes: Sequence, visible: Callable[[int, int], bool], tie_tol: float = 0.0) -> Optional[list]:
+    """Dijkstra over a visibility graph: node indices of the shortest way from nodes[0] to nodes[1].
+
+    Nodes are 2D points; an edge i-j exists when visible(i, j), weighted by its length. A new way to a node
+    replaces the known one only when shorter by more than `tie_tol` (so that, of two equal ways, the first
+    found is kept). None when nodes[1] cannot be reached.
+    """
+    dist = {0: 0.0}
+    prev: dict = {}
+    heap = [(0.0, 0)]
+    done = set()
+    while heap:
+        d, i = heapq.heappop(heap)
+        if i in done:
+            continue
+        done.add(i)
+        if i == 1:
+            break
+        for j in range(len(nodes)):
+            if j in done or not visible(i, j):
+                continue
+            nd = d + math.dist(nodes[i], nodes[j])
+            if nd < dist.get(j, math.inf) - tie_tol:
+                dist[j] = nd
+                prev[j] = i
+                heapq.heappush(heap, (nd, j))
+    if 1 not in done:
+        return None
+    path, k = [1], 1
+    while k != 0:
+        k = prev[k]
+        path.append(k)
+    return path[::-1]
 
 
 def plan_2d(start: Sequence[float], goal: Sequence[float], obstacles: Sequence[Sequence[float]],
@@ -203,31 +245,7 @@ def plan_2d(start: Sequence[float], goal: Sequence[float], obstacles: Sequence[S
                 nodes.append((cx, cy))
 
     def visible(i: int, j: int) -> bool:
-        return not any(_segment_hits_rect(nodes[i], nodes[j], r) for r in grown)
+        return not any(segment_hits_rect(nodes[i], nodes[j], r) for r in grown)
 
-    dist = {0: 0.0}
-    prev: dict = {}
-    heap = [(0.0, 0)]
-    done = set()
-    while heap:
-        d, i = heapq.heappop(heap)
-        if i in done:
-            continue
-        done.add(i)
-        if i == 1:
-            break
-        for j in range(len(nodes)):
-            if j in done or not visible(i, j):
-                continue
-            nd = d + math.dist(nodes[i], nodes[j])
-            if nd < dist.get(j, math.inf):
-                dist[j] = nd
-                prev[j] = i
-                heapq.heappush(heap, (nd, j))
-    if 1 not in done:
-        return None
-    path, k = [nodes[1]], 1
-    while k != 0:
-        k = prev[k]
-        path.append(nodes[k])
-    return path[::-1]
+    path = shortest_path(nodes, visible)
+    return None if path is None else [nodes[k] for k in path]

@@ -1,14 +1,17 @@
-"""Routes around the building and through the virtual elevators (pure numpy-free geometry).
+"""Routes around the building and through the virtual elevators (pure geometry, no ROS).
 
 A UAV never changes altitude next to the building except inside its virtual elevator, a vertical column
 at a tower corner; at a fixed altitude it goes around the footprint of whatever part of the building is
 taller than it. This keeps the UAVs separated: each has its own transit altitude and its own elevator.
+The segment-vs-rectangle test and the visibility-graph search are the agents' (mbzirc_agents.geometry):
+the strategy and the agents route around the same building with the same code.
 """
 from __future__ import annotations
 
-import heapq
 import math
 from typing import Optional, Sequence
+
+from mbzirc_agents import geometry as AG
 
 from . import constants as C
 
@@ -17,6 +20,7 @@ Pose = tuple[float, float, float, float]  # x, y, z, yaw
 Rect = tuple[float, float, float, float]  # xmin, ymin, xmax, ymax
 
 EPS = 1e-6
+SHRINK = 1e-4  # m: a segment must enter a rectangle this far to hit it
 CORNER_PAD = 0.3  # corner waypoints sit this far outside the inflated rectangle
 
 
@@ -44,24 +48,9 @@ def inside(p: Sequence[float], r: Rect, tol: float = EPS) -> bool:
 
 
 def segment_hits_rect(p: Sequence[float], q: Sequence[float], r: Rect) -> bool:
-    """True if the 2D segment p-q passes through the open interior of r (Liang-Barsky clipping)."""
-    t0, t1 = 0.0, 1.0
-    dx, dy = q[0] - p[0], q[1] - p[1]
-    shrink = 1e-4
-    for pk, qk in ((-dx, p[0] - (r[0] + shrink)), (dx, (r[2] - shrink) - p[0]),
-                   (-dy, p[1] - (r[1] + shrink)), (dy, (r[3] - shrink) - p[1])):
-        if abs(pk) < EPS:
-            if qk < 0:
-                return False
-        else:
-            t = qk / pk
-            if pk < 0:
-                t0 = max(t0, t)
-            else:
-                t1 = min(t1, t)
-            if t0 > t1:
-                return False
-    return t1 - t0 > 1e-6
+    """True if the 2D segment p-q passes through the open interior of r, shrunk by SHRINK so that a
+    route along the border (or ending on it) does not count."""
+    return AG.segment_hits_rect(p, q, r, shrink=SHRINK)
 
 
 def push_out(p: Sequence[float], r: Rect) -> tuple[float, float]:
@@ -81,30 +70,8 @@ def route_2d(p: Sequence[float], q: Sequence[float], r: Optional[Rect]) -> list[
     corners = [(r[0] - CORNER_PAD, r[1] - CORNER_PAD), (r[2] + CORNER_PAD, r[1] - CORNER_PAD),
                (r[2] + CORNER_PAD, r[3] + CORNER_PAD), (r[0] - CORNER_PAD, r[3] + CORNER_PAD)]
     nodes = [tuple(p[:2]), tuple(q[:2])] + corners
-    dist = {0: 0.0}
-    prev: dict[int, int] = {}
-    heap = [(0.0, 0)]
-    while heap:
-        d, i = heapq.heappop(heap)
-        if i == 1:
-            break
-        if d > dist.get(i, math.inf):
-            continue
-        for j in range(len(nodes)):
-            if j == i or segment_hits_rect(nodes[i], nodes[j], r):
-                continue
-            nd = d + math.dist(nodes[i], nodes[j])
-            if nd < dist.get(j, math.inf) - EPS:
-                dist[j] = nd
-                prev[j] = i
-                heapq.heappush(heap, (nd, j))
-    if 1 not in prev:
-        return []
-    out, k = [], prev[1]
-    while k != 0:
-        out.append(nodes[k])
-        k = prev[k]
-    return out[::-1]
+    path = AG.shortest_path(nodes, lambda i, j: not segment_hits_rect(nodes[i], nodes[j], r), tie_tol=EPS)
+    return [] if path is None else [nodes[k] for k in path[1:-1]]
 
 
 def level_route(p: Point, q: Point, z: float, margin: float = C.ROUTE_MARGIN) -> list[Point]:

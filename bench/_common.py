@@ -1,0 +1,51 @@
+"""What every benchmark script shares: where the workspace and the results are, single-threaded numerics,
+the machine's load average next to the figures, and writing bench/results/<name>.json.
+
+Not a benchmark itself (tools/run_bench.sh runs bench_*.py only). The scripts import it as `_common`:
+Python puts the script's own folder, bench/, first on sys.path.
+"""
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+SRC = os.path.join(ROOT, "catkin_ws", "src")
+# BENCH_RESULTS_DIR: write elsewhere (a trial run, a --quick check) without replacing the reference figures.
+RESULTS = os.environ.get("BENCH_RESULTS_DIR") or os.path.join(HERE, "results")
+
+
+def single_threaded() -> None:
+    """One thread per numeric library (OpenMP, OpenBLAS, MKL), for figures that are one core's.
+
+    Call it before numpy or OpenCV is imported: the libraries read these variables when they load.
+    """
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = "1"
+
+
+def use_sources(*paths: str) -> None:
+    """Puts catkin_ws/src/<path> folders first on sys.path, so a benchmark runs on the source tree
+    without a catkin build (e.g. "mbzirc_agents/src")."""
+    sys.path[:0] = [os.path.join(SRC, p) for p in paths]
+
+
+def load_average_1min() -> float:
+    """The 1-minute load average: on a shared machine, the context a timing figure needs."""
+    return round(os.getloadavg()[0], 1)
+
+
+def load_averages() -> list:
+    """The 1, 5 and 15-minute load averages."""
+    return [round(x, 2) for x in os.getloadavg()]
+
+
+def write_result(name: str, result: dict, indent: int = 2, say: bool = True) -> str:
+    """Writes `result` as RESULTS/<name>.json (what tools/run_bench.sh merges into latest.json)."""
+    os.makedirs(RESULTS, exist_ok=True)
+    path = os.path.join(RESULTS, f"{name}.json")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(result, f, indent=indent)
+    if say:
+        print(f"wrote {os.path.relpath(path, ROOT) if path.startswith(ROOT) else path}")
+    return path

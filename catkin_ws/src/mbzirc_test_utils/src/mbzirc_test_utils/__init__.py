@@ -1,0 +1,1 @@
+"""Helpers shared by the rostests of several packages (written once instead of once per test file)."""
