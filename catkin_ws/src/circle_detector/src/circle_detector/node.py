@@ -20,6 +20,7 @@ from circle_detector.images import image_to_array, to_bgr
 THROTTLE_S = 5.0
 SYNC_QUEUE = 10
 SYNC_SLOP_S = 0.05
+LAZY_POLL_S = 0.25   # s between checks of the on-demand outputs' subscribers (lazy mode)
 
 
 def read_params() -> HoughParams:
@@ -68,14 +69,51 @@ class CircleDetectorNode:
             if self.publish_debug_marker else None
         self.image_pub = rospy.Publisher("circle_detection/detected_circles_image", Image, queue_size=1) \
             if self.publish_debug_images else None
-        rospy.Subscriber("camera/color/camera_info", CameraInfo, self.on_camera_info, queue_size=1)
+        self.lazy = bool(rospy.get_param("~lazy", False))
+        self.camera_subs: list = []
+        self.demand_timer = None
+        if self.lazy:
+            # like image_proc's lazy nodelets: camera images only while someone listens to an on-demand output
+            self.demand_timer = rospy.Timer(rospy.Duration(LAZY_POLL_S), self.check_demand)
+        else:
+            self.subscribe_camera()
+        rospy.loginfo("circle_detector: radius %.2f-%.2f m, depth < %.1f m, downscale %d, rectify %s, lazy %s",
+                      self.params.min_radius_meters, self.params.max_radius_meters, self.params.max_depth_th,
+                      self.params.downscale, self.params.rectify, self.lazy)
+
+    def demand(self) -> int:
+        """Subscribers of the on-demand outputs (middle hole, debug marker and image).
+
+        `sensed_objects` does not count: the object estimator listens to it all the time. A client that
+        needs holes (the agent centring a facade hole) subscribes to `circle_detection/middle_hole`.
+        """
+        pubs = [self.hole_pub, self.marker_pub, self.image_pub]
+        return sum(p.get_num_connections() for p in pubs if p is not None)
+
+    def check_demand(self, _event=None) -> None:
+        """Lazy mode: subscribe to the camera while there is demand, unsubscribe when there is none."""
+        wanted = self.demand() > 0
+        if wanted and not self.camera_subs:
+            rospy.loginfo("circle_detector: a client needs holes, subscribing to the camera")
+            self.subscribe_camera()
+        elif not wanted and self.camera_subs:
+            rospy.loginfo("circle_detector: no client needs holes, unsubscribing from the camera")
+            self.unsubscribe_camera()
+
+    def subscribe_camera(self) -> None:
+        """Camera info, and colour + depth through an approximate-time synchroniser."""
+        info = rospy.Subscriber("camera/color/camera_info", CameraInfo, self.on_camera_info, queue_size=1)
         color = message_filters.Subscriber("camera/color/image_rect_color", Image, queue_size=1)
         depth = message_filters.Subscriber("camera/aligned_depth_to_color/image_raw", Image, queue_size=1)
         self.sync = message_filters.ApproximateTimeSynchronizer([color, depth], SYNC_QUEUE, SYNC_SLOP_S)
         self.sync.registerCallback(self.on_images)
-        rospy.loginfo("circle_detector: radius %.2f-%.2f m, depth < %.1f m, downscale %d, rectify %s",
-                      self.params.min_radius_meters, self.params.max_radius_meters, self.params.max_depth_th,
-                      self.params.downscale, self.params.rectify)
+        self.camera_subs = [info, color, depth]
+
+    def unsubscribe_camera(self) -> None:
+        """Drop the camera subscriptions (the simulator stops rendering images nobody receives)."""
+        for sub in self.camera_subs:
+            sub.unregister()
+        self.camera_subs = []
 
     def on_camera_info(self, msg: CameraInfo) -> None:
         try:

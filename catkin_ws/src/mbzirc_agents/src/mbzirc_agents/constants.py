@@ -88,3 +88,4 @@ FACADE_STANDOFF = 2.0           # m in front of a facade fire holder
 HOLE_JUMP_MAX = 1.5             # m: a hole position further than this from the locked one -> abort
 COLD_CHECKS = 3                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
+HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)

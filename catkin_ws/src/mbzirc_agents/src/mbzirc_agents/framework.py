@@ -41,19 +41,51 @@ class AgentInterface:
         self._pubs: Dict[str, Any] = {}
         self._clients: Dict[str, Any] = {}
         self._active: List[str] = []          # stack: top-level task, then its running sub-tasks
+        self._demands: Dict[str, list] = {}   # task name -> [(topic, type)] subscribed only while it runs
+        self._demand_subs: Dict[str, list] = {}
         self._lock = threading.Lock()
 
     # -- activity
     def push_active(self, task_name: str) -> None:
-        """A task (or sub-task) starts: its callbacks receive data from now on."""
+        """A task (or sub-task) starts: its callbacks receive data from now on, its demands open."""
         with self._lock:
             self._active.append(task_name)
+            demands = list(self._demands.get(task_name, []))
+        subs = []
+        for topic, msg_type in demands:
+            try:
+                subs.append((topic, self.backend.subscriber(topic, msg_type, lambda _msg: None)))
+            except Exception as e:  # noqa: BLE001 - a producer switched off costs time, not the task
+                self.backend.logerr(f'{task_name}: could not subscribe to {topic}: {e!r}')
+        if subs:
+            with self._lock:
+                self._demand_subs.setdefault(task_name, []).extend(subs)
 
     def pop_active(self, task_name: str) -> None:
-        """A task ends: its callbacks stop receiving."""
+        """A task ends: its callbacks stop receiving, its demands close."""
         with self._lock:
             if task_name in self._active:
                 self._active.remove(task_name)
+            subs = self._demand_subs.pop(task_name, [])
+        for _topic, sub in subs:
+            unregister = getattr(sub, 'unregister', None)
+            if unregister is not None:
+                unregister()
+
+    def add_demand(self, task_name: str, topic: str, msg_type: Any) -> None:
+        """Subscribe to topic only while task_name runs, to switch on a lazy producer.
+
+        Why: a lazy node (circle_detector ~lazy) works only while one of its outputs has a subscriber, and
+        the always-on `sensed_objects` cannot say so (the estimator listens to it all the time). The
+        subscription carries no data to the task; its existence is the request.
+        """
+        with self._lock:
+            self._demands.setdefault(task_name, []).append((topic, msg_type))
+
+    def demanded_topics(self) -> List[str]:
+        """Topics subscribed now because a running task demands them."""
+        with self._lock:
+            return [topic for subs in self._demand_subs.values() for topic, _ in subs]
 
     def active_tasks(self) -> List[str]:
         """Names of the active tasks, outermost first."""

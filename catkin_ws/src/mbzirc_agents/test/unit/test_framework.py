@@ -201,3 +201,44 @@ def test_bad_callback_is_logged_not_raised():
     iface.add_subscriber(None, 't', str, lambda m: 1 / 0)
     be.subs['t']('x')
     assert be.errors and 'ZeroDivisionError' in be.errors[0]
+
+
+def test_demand_subscribes_only_while_the_task_runs():
+    """add_demand: the subscription that switches a lazy producer on exists only while its task runs."""
+    made, dropped = [], []
+
+    class Sub:
+        def __init__(self, topic):
+            self.topic = topic
+            made.append(topic)
+
+        def unregister(self):
+            dropped.append(self.topic)
+
+    be = FakeBackend()
+    be.subscriber = lambda topic, msg_type, cb: Sub(topic)
+    iface = AgentInterface(be)
+    iface.add_demand('centre', 'circle_detection/middle_hole', object)
+    assert made == [] and iface.demanded_topics() == []
+    iface.push_active('other')
+    assert made == []
+    iface.push_active('centre')
+    assert made == ['circle_detection/middle_hole']
+    assert iface.demanded_topics() == ['circle_detection/middle_hole']
+    iface.pop_active('centre')
+    assert dropped == ['circle_detection/middle_hole'] and iface.demanded_topics() == []
+    iface.push_active('centre')            # a second run subscribes again
+    assert made == ['circle_detection/middle_hole'] * 2
+
+
+def test_demand_that_cannot_subscribe_is_logged():
+    be = FakeBackend()
+
+    def boom(topic, msg_type, cb):
+        raise RuntimeError('master unreachable')
+    be.subscriber = boom
+    iface = AgentInterface(be)
+    iface.add_demand('centre', 'x', object)
+    iface.push_active('centre')            # no exception: the task goes on without the producer
+    iface.pop_active('centre')
+    assert be.errors and 'master unreachable' in be.errors[-1]

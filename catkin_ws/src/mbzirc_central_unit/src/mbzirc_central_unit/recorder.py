@@ -42,6 +42,7 @@ class MissionRecorder:
         self.status: dict[str, Any] = {}
         self.wall_start = time.time()
         self.sim_start_wall: float | None = None
+        self.sim_at_start = 0.0          # sim time of the first /sim/score the recorder received
         self.done = False
         self.last_progress = -math.inf
         os.makedirs(self.out_dir, exist_ok=True)
@@ -85,13 +86,29 @@ class MissionRecorder:
     def _on_score(self, msg: Any) -> None:
         if self.sim_start_wall is None:  # the wall clock of the trial starts with the simulator's
             self.sim_start_wall = time.time()
+            self.sim_at_start = float(msg.elapsed)
         with self.lock:
             self.rec.set_score(msg.elapsed, msg.score, list(msg.crashed_robots))
 
     # ---- the referee ----------------------------------------------------------------------------
+    def _rtf(self) -> float:
+        """Sim seconds per wall second since the recorder first heard the simulator.
+
+        Why not elapsed / wall: on a busy machine the recorder may come up after the simulator has run
+        for a while, and the sim time it missed has no wall time to divide by.
+        """
+        if self.sim_start_wall is None:
+            return 0.0
+        wall = time.time() - self.sim_start_wall
+        return (self.rec.elapsed - self.sim_at_start) / wall if wall > 1.0 else 0.0
+
     def _wall(self) -> float:
-        start = self.sim_start_wall if self.sim_start_wall is not None else self.wall_start
-        return time.time() - start
+        """Wall time of the whole trial: measured, plus the sim time before the recorder at the same rate."""
+        if self.sim_start_wall is None:
+            return time.time() - self.wall_start
+        wall = time.time() - self.sim_start_wall
+        rtf = self._rtf()
+        return wall + (self.sim_at_start / rtf if rtf > 0 else 0.0)
 
     def _check(self, _event: Any) -> None:
         if self.done:
@@ -111,8 +128,7 @@ class MissionRecorder:
         r = self.rec
         found = len(self.status.get("fires", []))
         out = sum(1 for f in r.fires.values() if f.extinguished)
-        wall = self._wall()
-        rtf = r.elapsed / wall if wall > 0 else 0.0
+        rtf = self._rtf()
         robots = []
         for rid, a in sorted(self.status.get("agents", {}).items()):
             what = a.get("doing") or a.get("task") or "idle"

@@ -33,6 +33,8 @@ from .world_model import AgentView, FireView, WorldView
 GROUND_SEARCH_PLAN = ("holders", "holders", "sweep", "holders", "sweep")
 MIN_TRANSIT_Z = 1.5  # m: a transit starting lower climbs straight up to this first
 PLAUSIBLE_RADIUS = 2.0  # m from a holder of the layout for a facade / indoor fire track to be a target
+VIEWPOINT_TOL = 0.7  # m: an agent this close to an indoor holder's viewpoint puts the fire out from there
+VIEWPOINT_MAX_DIST = 3.0  # m between a fire track and the viewpoint (2 m in front of its holder) used for it
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
 
@@ -441,6 +443,14 @@ class Strategy:
         inside = self._inside_tower(a) and G.floor_of(a.z) == floor
         if fire is not None:
             if inside and layout.clear_indoors(floor, a.position, fire.position):
+                view = self._viewpoint_of(floor, fire)
+                if view is not None and math.dist(a.position, view[:3]) > VIEWPOINT_TOL \
+                        and self._ok(a, C.SEARCH_INDOOR, ("view", fire.fire_id)):
+                    # water along the wall's normal: from anywhere else the jet meets the wall at a slant
+                    # and the estimate's error sends most of it beside the container
+                    return Command(a.agent_id, C.SEARCH_INDOOR, {"floor": floor, "path": [view]},
+                                   f"to the viewpoint of indoor fire {fire.fire_id}, floor {floor}",
+                                   ("view", fire.fire_id))
                 return Command(a.agent_id, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
                                f"water on indoor fire {fire.fire_id}, floor {floor}", fire.fire_id)
             idx = layout.room_for(floor, fire.position)
@@ -458,6 +468,12 @@ class Strategy:
             return Command(a.agent_id, C.SEARCH_INDOOR, {"floor": floor, "path": list(room.path)},
                            f"searching floor {floor} indoors (room {idx})", (floor, idx))
         return self._to_room(a, floor, idx, room, inside, f"to search room {idx}")
+
+    def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:
+        """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire."""
+        views = [v for r in self.p.layout.rooms.get(floor, []) for v in r.path]
+        near = [v for v in views if math.dist(v[:3], fire.position) <= VIEWPOINT_MAX_DIST]
+        return min(near, key=lambda v: math.dist(v[:3], fire.position)) if near else None
 
     def _to_room(self, a: AgentView, floor: int, idx: int, room: Room, inside: bool, why: str) -> Command:
         """enter_building when in front of the room's window, else a transit there (leaving first)."""

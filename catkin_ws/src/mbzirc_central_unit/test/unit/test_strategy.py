@@ -342,6 +342,25 @@ def test_an_indoor_fire_estimated_slightly_into_its_wall_is_put_out_from_the_roo
     assert not layout.clear_indoors(1, east[:3], fire.position)
 
 
+def test_an_indoor_fire_is_put_out_from_its_viewpoint_not_from_the_window():
+    """Inside the room but at the window: first to the viewpoint in front of the holder (water along the
+    wall's normal), then extinguish from there."""
+    s = Strategy()
+    room = s.p.layout.rooms[1][0]
+    view = room.path[0]
+    fire = FireView(41, 17.75, 8.5, 6.5, C.KIND_INDOOR)
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *room.inner, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    assert math.dist(room.inner, view[:3]) > 1.0
+    cmd = s.decide(WorldView(0.0, {"2": a}, {41: fire}))[0]
+    assert cmd.task == C.SEARCH_INDOOR and cmd.goal["path"] == [view]
+    s.on_sent(cmd); s.on_result(cmd, True)
+    at_view = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *view[:3], ual_state=C.UAL_FLYING_AUTO,
+                        water_level=2.0, last_seen=0.0)
+    cmd = s.decide(WorldView(1.0, {"2": at_view}, {41: fire}))[0]
+    assert (cmd.task, cmd.goal["fire_id"]) == (C.EXTINGUISH_INDOOR_FIRE, 41)
+
+
 def test_a_transit_starting_near_the_ground_climbs_first():
     s = Strategy()
     a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,

@@ -10,12 +10,14 @@ import math
 from typing import Optional
 
 import numpy as np
+from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import LaserScan
 
 from .. import constants as C
 from ..control import HoleCentering, body_to_world, front_distance, pick_hole, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall, nearest_face
+from .cold_check import ColdConfirmation
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects
 
@@ -172,6 +174,8 @@ class ExtinguishFacadeFire(AgentTask):
         self.locked_hole: Optional[np.ndarray] = None
         self._front = (math.inf, -1e9)          # (laser distance ahead m, receive time)
         self.iface.add_subscriber(self.name, 'scan', LaserScan, self._on_scan)
+        # switches the (lazy) circle detector on while this task runs: holes arrive in sensed_objects
+        self.iface.add_demand(self.name, C.HOLE_DEMAND_TOPIC, PointStamped)
 
     def _on_scan(self, msg: LaserScan) -> None:
         """Keep the distance ahead; a malformed scan is reported and ignored."""
@@ -250,7 +254,8 @@ class ExtinguishFacadeFire(AgentTask):
         centred_once = False
         pumping_since = None
         last_centred = -1e9
-        cold_checks = 0
+        cold = ColdConfirmation()
+        cold.seen_hot = True                            # it was hot when the search found it
         last_check = -1e9
         while True:
             self.check_preempt()
@@ -279,11 +284,6 @@ class ExtinguishFacadeFire(AgentTask):
                 return a.fire_detected() is False
             if centred_once and now - last_check >= 0.5:   # once water flowed: is the fire still hot?
                 last_check = now
-                hot = a.fire_detected()
-                if hot is False:
-                    cold_checks += 1
-                    if cold_checks >= C.COLD_CHECKS:
-                        return True                     # cold: stop pumping, keep the rest of the tank
-                elif hot:
-                    cold_checks = 0                     # None (detector silent): no evidence either way
+                if cold.update(a.fire_detected()):
+                    return True                         # cold: stop pumping, keep the rest of the tank
             a.backend.sleep(dt)

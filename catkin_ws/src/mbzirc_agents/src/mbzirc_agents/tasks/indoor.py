@@ -12,6 +12,7 @@ import numpy as np
 from .. import constants as C
 from ..framework import AgentTask, TaskError
 from ..geometry import facing_pose
+from .cold_check import ColdConfirmation
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 
 
@@ -137,25 +138,39 @@ class ExtinguishIndoorFire(AgentTask):
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         if self.call_task('move', {'waypoint': (pos, yaw)}) != C.SUCCESS:
             raise TaskError(self.last_sub_result.get('message', 'approach failed'))
+        self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
+        cold = ColdConfirmation()
+        if not self._seen_hot(cold, float(a.p['check_fire_time'])):
+            raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
         try:
             a.start_pump()
             start = a.backend.now()
-            cold = False
             while not a.water_empty():
                 self.check_preempt()
                 if a.backend.now() - start > float(a.p['extinguish_timeout']):
                     raise TaskError('timeout while pumping')
                 self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
                 self.sleep(0.5)
-                if a.backend.now() - start > 3.0 and a.fire_detected() is False:
-                    cold = True
+                if cold.update(a.fire_detected()):
                     break
+            else:
+                cold.update(a.fire_detected())          # tank empty: one last look
         finally:
             a.stop_pump()
-        cold = cold or a.fire_detected() is False
-        if cold:
+        if cold.out:
             a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         water = a.water_level if math.isfinite(a.water_level) else 0.0
-        self.result.update(extinguished=cold, water_left=max(0.0, water),
-                           message=f'fire {ud.fire_id} ' + ('extinguished' if cold else 'still hot, tank empty'))
+        self.result.update(extinguished=cold.out, water_left=max(0.0, water),
+                           message=f'fire {ud.fire_id} ' + ('extinguished' if cold.out else 'still hot, tank empty'))
         return C.SUCCESS
+
+    def _seen_hot(self, cold: ColdConfirmation, seconds: float) -> bool:
+        """Poll CheckFire for up to seconds (its frame filter needs > 1 s of hot frames) until hot."""
+        end = self.agent.backend.now() + seconds
+        while True:
+            cold.update(self.agent.fire_detected())
+            if cold.seen_hot:
+                return True
+            if self.agent.backend.now() >= end:
+                return False
+            self.sleep(0.25)

@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""rostest: a water UAV finds and puts out an indoor fire through a window (ground truth from /sim/fires).
+
+The goals are the central unit's (its layout: room, window entry, viewpoints); the UAV has no knowledge
+of which holder burns: it must find it with its thermal camera.
+"""
+import math
+import os
+import sys
+import unittest
+
+import rospy
+import rostest
+from actionlib_msgs.msg import GoalStatus
+from ual_sim.msg import FireState, FireStateArray, Score
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'mbzirc_agents', 'test'))
+from agent_test_utils import pose, run, wait_wall  # noqa: E402
+
+from mbzirc_central_unit import geometry as G  # noqa: E402
+from mbzirc_central_unit.layout import Layout  # noqa: E402
+
+UAV = 2
+FLOOR = 1
+
+
+class TestIndoorFires(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_indoor_fires')
+        cls.fires, cls.crashed = None, []
+        rospy.Subscriber('/sim/fires', FireStateArray, lambda m: setattr(cls, 'fires', m))
+        rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
+        assert wait_wall(lambda: cls.fires is not None, 60), 'no /sim/fires'
+
+    def truth(self, fid):
+        return [f for f in self.fires.fires if f.id == fid][0]
+
+    def test_indoor_fire_through_a_window(self):
+        active = [f for f in self.fires.fires if f.kind == FireState.INDOOR and f.active and f.floor == FLOOR][0]
+        layout = Layout()
+        # the room searched is the one the strategy would search first for that holder (the test knows the
+        # active holder only to pick the room; the UAV is told nothing about it)
+        idx = layout.room_for(FLOOR, (active.position.x, active.position.y, active.position.z))
+        self.assertIsNotNone(idx, f'no room sees {active.id}')
+        room = layout.rooms[FLOOR][idx]
+        ex, ey, ez, eyaw = room.entry
+        state, res = run(UAV, 'take_off', 'TakeOff', 60, height=ez)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        route = G.plan_route((0.0, 0.0, ez), (ex, ey, ez), 0)
+        state, res = run(UAV, 'follow_path', 'FollowPath', 200, path=[pose(x, y, z, eyaw) for x, y, z in route])
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        state, res = run(UAV, 'enter_building', 'EnterBuilding', 60, floor=FLOOR, entry=pose(ex, ey, ez, eyaw))
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        path = [pose(x, y, z, yaw) for x, y, z, yaw in room.path]
+        state, res = run(UAV, 'search_indoor', 'SearchIndoor', 120, floor=FLOOR, path=path)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        self.assertEqual(len(res.fire_ids), 1, res.message)
+        state, res = run(UAV, 'extinguish_indoor_fire', 'ExtinguishIndoorFire', 150, fire_id=res.fire_ids[0])
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        rospy.sleep(1.0)
+        truth = self.truth(active.id)
+        self.assertTrue(res.extinguished, res.message)
+        self.assertTrue(truth.extinguished, f'{active.id} progress {truth.progress:.3f} after "{res.message}", '
+                                            f'{res.water_left:.2f} L left')
+        self.assertEqual(self.crashed, [])
+
+
+if __name__ == '__main__':
+    rostest.rosrun('mbzirc_central_unit', 'test_indoor_fires', TestIndoorFires)
