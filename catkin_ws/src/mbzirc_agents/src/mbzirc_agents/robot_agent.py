@@ -64,6 +64,7 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'blanket_release_height': 1.5,
     'entry_depth': 2.5,
     'indoor_fire_distance': 1.5,
+    'top_up_time': 3.0,
     'building_clearance': 1.5,
     'home': [],                        # [x, y, z]; empty: the first pose received
 }

@@ -201,7 +201,12 @@ class Strategy:
             owner = owners.get(floor)
             if owner is not None and owner != agent_id and self._owner_alive(owner, world):
                 return False
-        return True
+        # A UAV that gave the floor up may still be there (leaving through a window, on its way to an
+        # elevator): the floor stays taken until it is away, or the two meet at the window and wait for
+        # each other's reserved regions forever (seen in a mission).
+        return not any(o.agent_id != agent_id and o.is_uav and o.alive(world.now, self.p.agent_timeout)
+                       and not o.landed and G.floor_of(o.z) == floor and self._near_building(o)
+                       for o in world.agents.values())
 
     def _rebuild_ownership(self, world: WorldView) -> None:
         """After a restart nothing is owned: agents busy on a facade or indoors keep the floor they are on."""

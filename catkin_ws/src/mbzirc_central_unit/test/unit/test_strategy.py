@@ -361,6 +361,26 @@ def test_an_indoor_fire_is_put_out_from_its_viewpoint_not_from_the_window():
     assert (cmd.task, cmd.goal["fire_id"]) == (C.EXTINGUISH_INDOOR_FIRE, 41)
 
 
+def test_a_floor_stays_taken_while_the_uav_that_left_it_is_still_there():
+    """UAV 2 leaves floor 1 through its window (it owns nothing any more); UAV 3 is not sent to that
+    floor's window until UAV 2 is away from the building, or they would block each other there."""
+    s = Strategy(StrategyParams(facade_searches=0))
+    room = s.p.layout.rooms[1][0]
+    fire = FireView(42, 17.75, 8.5, 6.5, C.KIND_INDOOR)
+    leaving = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *room.entry[:3], ual_state=C.UAL_FLYING_AUTO,
+                        water_level=0.3, last_seen=0.0)
+    idle = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, -5.0, 0.0, 8.0, ual_state=C.UAL_FLYING_AUTO,
+                     water_level=2.0, last_seen=0.0)
+    cmds = {c.agent_id: c for c in s.decide(WorldView(0.0, {"2": leaving, "3": idle}, {42: fire}))}
+    assert s.indoor_owner.get(1) != "3"
+    assert "indoor fire 42" not in cmds["3"].reason and "floor 1" not in cmds["3"].reason
+    away = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, -5.0, 3.0, 4.0, ual_state=C.UAL_FLYING_AUTO,
+                     water_level=0.3, last_seen=1.0)
+    s2 = Strategy(StrategyParams(facade_searches=0))
+    cmds = {c.agent_id: c for c in s2.decide(WorldView(1.0, {"2": away, "3": idle}, {42: fire}))}
+    assert s2.indoor_owner.get(1) == "3" and "indoor fire 42" in cmds["3"].reason
+
+
 def test_a_transit_starting_near_the_ground_climbs_first():
     s = Strategy()
     a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,

@@ -1,0 +1,91 @@
+"""extinguish_indoor_fire against a fake UAL and a scripted thermal camera: when water flows, when it
+stops, and the top-up of a confirmed fire that reads cold."""
+import time
+
+import pytest
+from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList, TakeOffGoal
+from mbzirc_comm_objs.srv import CheckFireResponse
+
+from fake_backend import FakeBackend
+from fake_ual import FakeUal
+from mbzirc_agents import constants as C
+from mbzirc_agents.uav_agent import UavAgent
+
+
+class Scene:
+    """A UAV in the air, one indoor fire track, a thermal camera answering from a script."""
+
+    def __init__(self, hot_until=0.0, num_updates=50, std=0.2):
+        self.be = FakeBackend()
+        self.agent = UavAgent('2', self.be, {'check_fire_time': 1.0, 'top_up_time': 1.0, 'region_timeout': 5.0})
+        self.ual = FakeUal(self.be, speedup=2.0)
+        self.statuses = []
+        self.hot_until = hot_until
+        self.pumping_since = None
+        self.be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
+        self.be.handlers['/set_object_status'] = lambda r: self.statuses.append(r.object_status) or type('R', (), {})()
+        self.agent.start()
+        deadline = time.monotonic() + 2
+        while self.agent.pose is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        s = self.be.servers['take_off_action']
+        s.send(TakeOffGoal(height=6.5))
+        assert s.wait(10) == 'succeeded'
+        o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_LOST, num_updates=num_updates)
+        o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = 4.0, 0.0, 6.5
+        o.pose.covariance = [0.0] * 36
+        o.pose.covariance[0] = o.pose.covariance[7] = o.pose.covariance[14] = std ** 2
+        self.be.subs['/estimated_objects'](ObjectList(objects=[o]))
+
+    def hot(self):
+        """Hot until `hot_until` s of pumping (never seen hot when 0)."""
+        if self.ual.pump and self.pumping_since is None:
+            self.pumping_since = time.monotonic()
+        if self.hot_until <= 0:
+            return False
+        return self.pumping_since is None or time.monotonic() - self.pumping_since < self.hot_until
+
+    def extinguish(self):
+        s = self.be.servers['extinguish_indoor_fire_action']
+        s.send(ExtinguishIndoorFireGoal(fire_id=7))
+        assert s.wait(30) in ('succeeded', 'aborted')
+        return s
+
+    def close(self):
+        self.be.shutdown = True
+        self.ual.stop = True
+        self.agent.shutdown()
+
+
+@pytest.fixture
+def scenes():
+    made = []
+    yield lambda **kw: made.append(Scene(**kw)) or made[-1]
+    for s in made:
+        s.close()
+
+
+def test_water_flows_until_the_fire_reads_cold_several_times(scenes):
+    sc = scenes(hot_until=1.0)
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+    # hot 1 s of pumping, then C.COLD_CHECKS cold answers 0.5 s (sim = wall here) apart, water flowing
+    used = 2.0 - sc.ual.water
+    assert used >= 0.4 * (1.0 + 0.5 * (C.COLD_CHECKS - 1)) * 0.8, f'only {used:.2f} L pumped'
+
+
+def test_a_confirmed_fire_that_reads_cold_is_topped_up(scenes):
+    sc = scenes(hot_until=0.0)
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished and 'topped up' in s.result.message
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+    assert 0.2 < 2.0 - sc.ual.water < 1.0          # ~1 s at 0.4 L/s (fake UAL at twice real time)
+
+
+@pytest.mark.parametrize('updates,std', [(5, 0.2), (50, 1.0)])
+def test_a_doubtful_track_that_reads_cold_gets_no_water(scenes, updates, std):
+    sc = scenes(hot_until=0.0, num_updates=updates, std=std)
+    s = sc.extinguish()
+    assert s.status == 'aborted' and 'not in sight' in s.result.message
+    assert sc.statuses == [] and sc.ual.water == 2.0
