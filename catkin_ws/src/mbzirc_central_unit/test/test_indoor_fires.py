@@ -21,7 +21,6 @@ from mbzirc_central_unit import geometry as G  # noqa: E402
 from mbzirc_central_unit.layout import Layout  # noqa: E402
 
 UAV = 2
-FLOOR = 1
 
 
 class TestIndoorFires(unittest.TestCase):
@@ -37,6 +36,7 @@ class TestIndoorFires(unittest.TestCase):
         return [f for f in self.fires.fires if f.id == fid][0]
 
     def test_indoor_fire_through_a_window(self):
+        FLOOR = int(rospy.get_param('~floor', 1))
         active = [f for f in self.fires.fires if f.kind == FireState.INDOOR and f.active and f.floor == FLOOR][0]
         layout = Layout()
         # the room searched is the one the strategy would search first for that holder (the test knows the
