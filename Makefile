@@ -1,6 +1,7 @@
 # The project's commands. Every target first runs the idempotent setup (apt, venv, catkin_make).
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
-#   make test      run every test (pytest unit tests + rostest integration tests)      PKGS="smach ual_sim"
+#   make test      run every test (pytest unit tests + rostest integration tests + the short fault suite)
+#                  PKGS="smach ual_sim"   SKIP_FAULTS=1 (no fault suite)
 #   make bench     run the benchmarks, write bench/results/latest.json
 #   make test-faults  fuzz every node, then the mission on network-namespace hosts with link cuts and
 #                  kill -9 (root; a few minutes), report in results/robustness/report.json  SEED= UAVS= RTF=
@@ -24,8 +25,8 @@ mission: setup
 test: setup
 	@bash tools/run_tests.sh $(PKGS)
 
-# Separate from `make test`: it runs a whole mission (about 4 minutes at RTF 4 on an idle machine,
-# far longer on a loaded one) and needs root for ip netns.
+# The long version of the fault step of `make test` (which runs a short schedule): the fuzz rostests again,
+# then a whole 600 s mission with the faults (about 5 minutes at RTF 4). Needs root for ip netns.
 test-faults: setup
 	@mkdir -p results/robustness && source env.sh && for t in fuzz_project_nodes fuzz_mission_nodes fuzz_ugv_recorder_nodes; do \
 	    echo "fuzzing every input of the nodes of $$t.test"; \

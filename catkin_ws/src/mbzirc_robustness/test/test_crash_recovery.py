@@ -19,7 +19,7 @@ def suite(recover_wall_s=25.0):
 
 def monitor_stub():
     return types.SimpleNamespace(last_tracks=None, last_tracks_wall=0.0, last_heartbeat_wall=0.0,
-                                 last_feed_wall={})
+                                 last_feed_wall={}, sim_time=lambda: 0.0)
 
 
 class TestCrashRecovery(unittest.TestCase):

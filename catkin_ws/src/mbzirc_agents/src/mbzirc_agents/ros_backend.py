@@ -5,6 +5,7 @@ fake backend and no ROS master; this class is the only place that makes real ROS
 """
 from __future__ import annotations
 
+import time
 from typing import Any, Callable
 
 import actionlib
@@ -45,11 +46,18 @@ class RosBackend:
         return rospy.get_time()
 
     def sleep(self, seconds: float) -> None:
-        """rospy.sleep; returns quietly on shutdown or when sim time jumps back."""
-        try:
-            rospy.sleep(seconds)
-        except (rospy.ROSInterruptException, rospy.exceptions.ROSTimeMovedBackwardsException):
-            pass
+        """Sleep `seconds` of ROS time; returns quietly on shutdown or when sim time jumps back, and after
+        at most 2 x `seconds` + 1 s of wall time (never sooner than ROS time at a real-time factor >= 0.5).
+        Why the wall bound: in simulation /clock comes from the ground station and stops when the robot's
+        link is cut; a task asleep on it would never see the preempt of the heartbeat watchdog's safe stop
+        (mbzirc_robustness fault suite, permanently cut UAV)."""
+        start = rospy.get_time()
+        end_wall = time.monotonic() + 2.0 * max(float(seconds), 0.0) + 1.0
+        while not rospy.is_shutdown():
+            now = rospy.get_time()
+            if now - start >= seconds or now < start or time.monotonic() >= end_wall:
+                return
+            time.sleep(min(0.01, max(seconds - (now - start), 0.001)))
 
     def is_shutdown(self) -> bool:
         """rospy.is_shutdown."""

@@ -104,3 +104,28 @@ def test_fires_on_two_floors_stay_apart():
         est.add(det(np.array([11.4, 8.5, 6.0]) + rng.normal(0, 0.3, 3), t=k * 0.1))
         est.add(det(np.array([11.4, 8.5, 12.5]) + rng.normal(0, 0.3, 3), t=k * 0.1))
     assert len(est.objects()) == 2
+
+
+def test_an_extinguished_fire_does_not_swallow_a_fire_next_to_it():
+    """A facade fire put out at A_2 and, 3.2 m away behind the wall, the floor-2 indoor fire seen with the
+    fire detector's default covariance (1.5 m^2): the indoor fire gets its own ACTIVE track."""
+    est = ObjectEstimator(min_updates=3)
+    facade = np.array([17.4, 19.5, 10.5])
+    for k in range(10):
+        est.add(det(facade, t=k * 0.1))
+    (fid,) = [t.id for t in est.objects()]
+    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    indoor = np.array([17.9, 16.5, 11.5])
+    cov = np.diag([1.5, 1.5, 0.5])
+    rng = np.random.default_rng(7)
+    for k in range(20):
+        est.add(det(indoor + rng.normal(0, 0.2, 3), t=2.0 + k * 0.1, cov=cov))
+    tracks = {t.id: t for t in est.objects()}
+    assert len(tracks) == 2
+    assert tracks[fid].status == C.STATUS_EXTINGUISHED
+    assert np.linalg.norm(tracks[fid].position - facade) < 0.05        # not dragged towards the other fire
+    (other,) = [t for t in tracks.values() if t.id != fid]
+    assert other.status == C.STATUS_ACTIVE and np.linalg.norm(other.position - indoor) < 0.3
+    # leftover heat right at the extinguished fire still goes to it (no duplicate track)
+    est.add(det(facade + np.array([0.3, 0.0, 0.0]), t=5.0, cov=cov))
+    assert len(est.objects()) == 2

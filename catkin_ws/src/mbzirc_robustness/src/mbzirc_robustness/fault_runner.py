@@ -19,6 +19,7 @@ import os
 import shutil
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -55,6 +56,12 @@ class SuiteConfig:
     spacing_s: float = 25.0
     recover_wall_s: float = 45.0
     startup_wall_s: float = 180.0
+    # stop the mission as soon as every fault is judged (and a permanently cut UAV had the time to decide
+    # to go home) instead of at ``duration``: the short run of ``make test``
+    stop_when_done: bool = False
+    # the agents' heartbeat timeouts (mbzirc_agents defaults, wall clock): what the cut agents' logs are judged by
+    agent_timeout_wall_s: float = 5.0
+    return_home_wall_s: float = 60.0
     out_dir: str = "results/robustness/faults"
     fuzz_dir: str = "results/robustness"  # every fuzz_report*.json there is merged into the report
     report_path: str = "results/robustness/report.json"
@@ -75,6 +82,8 @@ class Monitor:
         self.last_feed_wall: dict[str, float] = {}
         self.last_tracks: Optional[int] = None
         self.last_tracks_wall = 0.0
+        self.last_objects: dict[int, int] = {}     # id -> status of the last /estimated_objects
+        self.objects_log: deque[tuple[float, dict[int, int]]] = deque(maxlen=600)  # (wall, id -> status)
         self.subs = [rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=10),
                      rospy.Subscriber("/central_unit/heartbeat", Header, self._on_heartbeat, queue_size=1),
                      rospy.Subscriber("/estimated_objects", ObjectList, self._on_objects, queue_size=1)]
@@ -97,8 +106,18 @@ class Monitor:
         self.last_feed_wall[robot] = time.monotonic()
 
     def _on_objects(self, msg) -> None:
+        objs = {int(o.id): int(o.status) for o in msg.objects}
+        now = time.monotonic()
+        with self.lock:
+            self.last_objects = objs
+            self.objects_log.append((now, objs))
         self.last_tracks = len(msg.objects)
-        self.last_tracks_wall = time.monotonic()
+        self.last_tracks_wall = now
+
+    def first_objects_after(self, wall: float) -> Optional[dict[int, int]]:
+        """The first /estimated_objects received after monotonic time ``wall`` (None if none yet)."""
+        with self.lock:
+            return next((o for t, o in self.objects_log if t > wall), None)
 
     def sim_time(self) -> float:
         return self.rospy.get_time()
@@ -185,14 +204,16 @@ class FaultSuite:
             f.result = {"survived": False, "detail": f"{f.target} was not running before the kill"}
             return
         tracks_before = mon.last_tracks or 0
+        objects_before = dict(getattr(mon, "last_objects", {}) or {})
         self.say(f"kill -9 {f.target} (pid {pid})" + (f", {tracks_before} tracks" if f.check == F.CHECK_TRACKS else ""))
         t_kill = time.monotonic()
+        f.result["t_kill"] = mon.sim_time()
         try:
             os.kill(pid, 9)
         except ProcessLookupError:
             pass
         deadline = t_kill + self.cfg.recover_wall_s
-        new_pid, functional = None, False
+        new_pid, functional, tracks_verdict = None, False, None
         while time.monotonic() < deadline:
             time.sleep(0.5)
             if new_pid is None:
@@ -200,19 +221,29 @@ class FaultSuite:
                 new_pid = p if p is not None and p != pid else None
             if new_pid is not None:
                 functional = self._functional(f, mon, t_kill, tracks_before)
+                if f.check == F.CHECK_TRACKS:
+                    after = mon.first_objects_after(t_kill + 0.5)
+                    tracks_verdict = None if after is None else F.compare_tracks(objects_before, after)
+                    functional = functional and tracks_verdict is not None and tracks_verdict["same"]
+                    if after is not None:
+                        break                      # judged on the respawned estimator's first message
                 if functional:
                     break
         took = time.monotonic() - t_kill
         if new_pid is None:
             detail = f"no new process named {f.target} within {self.cfg.recover_wall_s:.0f} s (respawn?)"
+        elif not functional and f.check == F.CHECK_TRACKS and tracks_verdict is not None:
+            detail = f"respawned (pid {new_pid}) but its tracks differ: {tracks_verdict['detail']}"
         elif not functional:
             detail = f"respawned (pid {new_pid}) but {f.check} did not recover"
         else:
             detail = f"respawned (pid {new_pid}) and {f.check} recovered in {took:.1f} s"
-        f.result = {"survived": new_pid is not None and functional, "detail": detail, "old_pid": pid,
-                    "new_pid": new_pid, "recovery_wall_s": round(took, 1)}
+        f.result.update({"survived": new_pid is not None and functional, "detail": detail, "old_pid": pid,
+                         "new_pid": new_pid, "recovery_wall_s": round(took, 1)})
         if f.check == F.CHECK_TRACKS:
             f.result.update(tracks_before=tracks_before, tracks_after=mon.last_tracks)
+            if tracks_verdict is not None:
+                f.result.update(tracks_check=tracks_verdict)
         self.say(f"{f.target}: {detail}")
 
     @staticmethod
@@ -228,7 +259,7 @@ class FaultSuite:
     def _cut(self, f: F.Fault, now: float) -> None:
         host = "ugv" if f.target == "0" else f"uav{f.target}"
         self.lab.set_link(host, False)
-        f.result = {"t_cut": now, "wall_cut": datetime.now().isoformat(timespec="seconds")}
+        f.result = {"t_cut": now, "wall_cut": datetime.now().isoformat(timespec="milliseconds")}
         self.say(f"link of {host} cut" + (f" for {f.duration_s:.0f} s" if f.duration_s else " for good"))
 
     # ---- main ----------------------------------------------------------------------------------
@@ -264,13 +295,23 @@ class FaultSuite:
         with open(os.path.join(self.out, "status_history.jsonl"), "w", encoding="utf-8") as fh:
             for t, st in history:  # the central unit's view, for whoever checks a verdict by hand
                 fh.write(json.dumps({"t": t, "status": st}) + "\n")
+        wall_end = getattr(self, "wall_stop", None) or datetime.now()  # before the hosts were torn down
+        cu_kills = [f.result["t_kill"] for f in self.cfg.schedule
+                    if f.kind == F.KIND_CRASH and f.check == F.CHECK_HEARTBEAT and "t_kill" in f.result]
         for f in self.cfg.schedule:
             if f.kind in (F.KIND_LINK_CUT, F.KIND_LINK_CUT_PERMANENT) and "t_cut" in f.result:
                 t_restore = f.result.get("t_restore")
-                f.result.update(F.evaluate_link_cut(history, f.target, f.result["t_cut"], t_restore))
-                f.result["agent_log_during_cut"] = self._agent_log(f)
+                f.result.update(F.evaluate_link_cut(history, f.target, f.result["t_cut"], t_restore,
+                                                    central_unit_kills=cu_kills))
+                self._judge_agent(f, history, wall_end)
         rep = robustness_report(fuzz, [F.scenario_entry(f) for f in self.cfg.schedule], summary,
                                 robots_lost=F.robots_lost(history))
+        if summary is None:
+            rep["failures"].append("no mission summary: the mission recorder never finished (mission stopped?)")
+        if error:
+            rep["failures"].append(f"suite error: {error}")
+        rep["checks_passed"] = sum(1 for sc in rep["scenarios"] if sc["survived"])
+        rep["checks_failed"] = len(rep["failures"])
         rep["error"] = error
         rep["config"] = {k: v for k, v in vars(self.cfg).items() if k != "schedule"}
         rep["log"] = self.log
@@ -278,11 +319,32 @@ class FaultSuite:
         print(format_robustness(rep), flush=True)
         return rep
 
-    def _agent_log(self, f: F.Fault) -> dict[str, Any]:
-        """The cut robot's own agent log while it was cut (plus 10 s), from its host's ROS log dir."""
+    def _judge_agent(self, f: F.Fault, history: list, wall_end: datetime) -> None:
+        """Add what the cut robot's agent did by itself (its own log) to the link cut's verdict."""
+        cut = datetime.fromisoformat(f.result["wall_cut"])
+        restore = datetime.fromisoformat(f.result["wall_restore"]) if f.result.get("wall_restore") else None
+        f.result["agent_log_during_cut"] = log = self._agent_log(f, wall_end)
+        before = [s for t, s in history if t <= f.result["t_cut"]]
+        pos = ((before[-1].get("agents") or {}).get(str(f.target)) or {}).get("pos") if before else None
+        flying = f.target != "0" and bool(pos) and len(pos) >= 3 and float(pos[2]) > 1.0
+        busy = bool(((before[-1].get("agents") or {}).get(str(f.target)) or {}).get("task")) if before else True
+        verdict = F.judge_agent_reaction(log, cut, restore, wall_end, expect_home=flying, busy_at_cut=busy,
+                                         lost_after_s=self.cfg.agent_timeout_wall_s,
+                                         home_after_s=self.cfg.return_home_wall_s)
+        f.result.update(verdict, flying_at_cut=flying, busy_at_cut=busy)
+        if not verdict["agent_ok"]:
+            f.result["survived"] = False
+            problems = [] if f.result.get("detail") in (None, "", "ok") else [f.result["detail"]]
+            f.result["detail"] = "; ".join(problems + verdict["agent_problems"])
+
+    def _agent_log(self, f: F.Fault, wall_end: datetime) -> dict[str, Any]:
+        """The cut robot's own agent log from the cut until 60 s after the restore (or the end), from its
+        host's ROS log dir (the ground station cannot hear it while cut)."""
         host = "ugv" if f.target == "0" else f"uav{f.target}"
         start = datetime.fromisoformat(f.result["wall_cut"])
-        end = datetime.fromisoformat(f.result.get("wall_restore") or datetime.now().isoformat()) + timedelta(seconds=10)
+        end = wall_end
+        if f.result.get("wall_restore"):
+            end = min(end, datetime.fromisoformat(f.result["wall_restore"]) + timedelta(seconds=60))
         lines: list[str] = []
         for path in glob.glob(os.path.join(self.out, "logs", host, "*", f"mbzirc2020_{f.target}-agent*.log")):
             if "latest" in path or path.endswith("-stdout.log"):
@@ -299,6 +361,7 @@ class FaultSuite:
         self.threads: list[threading.Thread] = []
         wall_limit = time.monotonic() + 2.0 * self.cfg.duration / max(self.cfg.rtf, 0.1) + 120.0
         restores: list[tuple[float, F.Fault]] = []
+        watch_until = 0.0   # monotonic: keep the mission going until then (a cut agent deciding to go home)
         while self.gs_proc.poll() is None:
             now = mon.sim_time() - t0
             for f in [f for f in pending if f.at_s <= now]:
@@ -312,20 +375,29 @@ class FaultSuite:
                     self._cut(f, mon.sim_time())
                     if f.duration_s:
                         restores.append((f.result["t_cut"] + f.duration_s, f))
+                    else:
+                        watch_until = max(watch_until, time.monotonic() + self.cfg.agent_timeout_wall_s
+                                          + self.cfg.return_home_wall_s + F.BLOCKED_CALL_S + 20.0)
+                        # (+ one blocked call: a task busy at the cut may end only after rospy's 60 s timeout)
             for t_restore, f in list(restores):
                 if mon.sim_time() >= t_restore:
                     host = "ugv" if f.target == "0" else f"uav{f.target}"
                     self.lab.set_link(host, True)
                     f.result["t_restore"] = mon.sim_time()
-                    f.result["wall_restore"] = datetime.now().isoformat(timespec="seconds")
+                    f.result["wall_restore"] = datetime.now().isoformat(timespec="milliseconds")
                     self.say(f"link of {host} restored")
                     restores.remove((t_restore, f))
             if time.monotonic() > wall_limit:
                 self.say("wall-time limit reached: stopping the ground station")
                 break
+            if (self.cfg.stop_when_done and not pending and not restores and time.monotonic() >= watch_until
+                    and not any(th.is_alive() for th in self.threads)):
+                self.say("every fault judged: stopping the ground station (--stop-when-done)")
+                break
             time.sleep(0.5)
         else:
             self.say("ground-station launch ended (mission over)")
+        self.wall_stop = datetime.now()
         for th in self.threads:
             th.join(self.cfg.recover_wall_s + 5.0)
         for f in pending:

@@ -85,13 +85,16 @@ def _owner(status: dict[str, Any], floor: str) -> Optional[str]:
 
 
 def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t_cut: float,
-                      t_restore: Optional[float], max_gap_s: float = 15.0) -> dict[str, Any]:
+                      t_restore: Optional[float], max_gap_s: float = 15.0,
+                      central_unit_kills: Iterable[float] = ()) -> dict[str, Any]:
     """Verdict on one link cut from the central unit's status history [(sim time, status), ...].
 
     Survived when: the central unit marked the robot silent, kept running through the cut (no status gap
     longer than ``max_gap_s``), gave every floor the robot owned to another robot (or released it; keeping
     it counts only when no other robot was alive and idle meanwhile), and,
     for a temporary cut, saw the robot alive again after the restore. Whether it got work again is reported.
+    A status gap that spans one of ``central_unit_kills`` (sim times of a scheduled kill -9 of the central
+    unit) is that fault's, judged by its own verdict, not this cut's.
     """
     robot = str(robot)
     before = [s for t, s in history if t <= t_cut]
@@ -101,7 +104,8 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     t_noticed = next((t for t, s in after if t <= window_end + 5.0 and _agent(s, robot)
                       and not _agent(s, robot).get("alive", True)), None)
     times = [t_cut] + [t for t, _ in after if t <= min(window_end, after[-1][0] if after else t_cut)]
-    gaps = [b - a for a, b in zip(times, times[1:])]
+    kills = list(central_unit_kills)
+    gaps = [b - a for a, b in zip(times, times[1:]) if not any(a <= k <= b for k in kills)]
     went_on = bool(after) and (max(gaps) if gaps else 0.0) <= max_gap_s
     reassigned, stuck, kept = [], [], []
     silent = [s for t, s in after if t_noticed is not None and t_noticed <= t <= window_end]
@@ -109,7 +113,8 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     free = sorted({r for s in silent for r, a in (s.get("agents") or {}).items()
                    if r != robot and a.get("alive") and not a.get("task")})
     for fl in owned:
-        later = [s for t, s in after if t_noticed is not None and t >= t_noticed]
+        # while it was silent: once it is back the central unit may rightly give it its floor again
+        later = [s for t, s in after if t_noticed is not None and t_noticed <= t <= window_end]
         if any(_owner(s, fl) not in (None, robot) for s in later):
             reassigned.append(fl)
         elif later and _owner(later[-1], fl) is None:
@@ -161,6 +166,29 @@ def robots_lost(history: list[tuple[float, dict[str, Any]]]) -> list[str]:
     return sorted(r for r, a in (history[-1][1].get("agents") or {}).items() if not a.get("alive", False))
 
 
+# mbzirc_comm_objs/Object statuses that are final (set through /set_object_status): must survive anything
+FINAL_STATUSES = {0: "INACTIVE", 4: "EXTINGUISHED"}
+LIVE_STATUSES = {1, 3}  # ACTIVE <-> LOST follows from time without detections, also while the estimator is down
+
+
+def compare_tracks(before: dict[int, int], after: dict[int, int]) -> dict[str, Any]:
+    """Verdict on an estimator restart: its tracks ({id: status}) before the kill and the first published
+    after it. The same when every id is still there and every final status (INACTIVE, EXTINGUISHED) kept;
+    ACTIVE <-> LOST may change (the restarted estimator ages the tracks it did not hear about meanwhile)."""
+    missing = sorted(set(before) - set(after))
+    changed = {i: [before[i], after[i]] for i in before if i in after and before[i] != after[i]}
+    bad = {i: v for i, v in changed.items() if not (v[0] in LIVE_STATUSES and v[1] in LIVE_STATUSES)}
+    problems = []
+    if missing:
+        problems.append(f"{len(missing)} of {len(before)} ids gone: {missing[:10]}")
+    if bad:
+        problems.append(f"statuses changed: {dict(list(bad.items())[:10])}")
+    return {"same": not problems, "ids_before": len(before), "ids_after": len(after), "missing_ids": missing,
+            "status_changes": {str(k): v for k, v in changed.items()},
+            "final_before": sum(1 for v in before.values() if v in FINAL_STATUSES),
+            "detail": "; ".join(problems) if problems else "same ids and statuses"}
+
+
 def scenario_entry(f: Fault) -> dict[str, Any]:
     """A fault and its result as one entry of the robustness report."""
     entry = {"kind": f.kind, "target": f.target, "at_s": f.at_s, "survived": bool(f.result.get("survived")),
@@ -176,15 +204,91 @@ def agent_log_window(lines: Iterable[str], start: datetime, end: datetime, keep:
 
     Why: a cut robot cannot be heard from the ground station; its own log says whether it noticed the
     heartbeat loss and what it did (stop, hold, return home) - or that it was stuck and said nothing.
+    Also returns the wall times (ISO) of the lines of each reaction (``events``: name -> times, at most
+    20 each), for ``judge_agent_reaction``.
     """
-    inside: list[str] = []
+    inside: list[tuple[datetime, str]] = []
     for line in lines:
         m = ROSOUT_LINE.match(line.rstrip("\n"))
         if not m:
             continue
         t = datetime.strptime(m.group(2), "%Y-%m-%d %H:%M:%S").replace(microsecond=int(m.group(3)) * 1000)
         if start <= t <= end:
-            inside.append(f"{m.group(2)[11:]} {m.group(1)}: {m.group(4)[:160]}")
-    hb = [x for x in inside if "heartbeat" in x.lower()]
-    return {"lines": len(inside), "heartbeat_lines": hb[:keep], "first": inside[:keep], "last": inside[-keep:],
-            "noticed_heartbeat_loss": bool(hb)}
+            inside.append((t, f"{m.group(2)[11:]} {m.group(1)}: {m.group(4)[:160]}"))
+    inside.sort(key=lambda x: x[0])
+    events: dict[str, list[str]] = {}
+    for t, text in inside:
+        for name, pattern in AGENT_REACTIONS.items():
+            if pattern.search(text) and len(events.setdefault(name, [])) < 20:
+                events[name].append(t.isoformat(timespec="milliseconds"))
+    texts = [x for _, x in inside]
+    hb = [x for x in texts if "heartbeat" in x.lower()]
+    return {"lines": len(texts), "heartbeat_lines": hb[:keep], "first": texts[:keep], "last": texts[-keep:],
+            "noticed_heartbeat_loss": "heartbeat_lost" in events, "events": events}
+
+
+# what an agent logs when it reacts to the central unit's heartbeat (mbzirc_agents robot_agent / uav_agent)
+AGENT_REACTIONS = {
+    "heartbeat_lost": re.compile(r"heartbeat lost", re.I),
+    "return_home": re.compile(r"go_home|cannot go home", re.I),
+    "heartbeat_back": re.compile(r"heartbeat back", re.I),
+    # the running task ended (smach: back to the idle state), whatever its outcome
+    "task_ended": re.compile(r"transitioning '(?!DEFAULT')[^']+':'[^']+'-->'DEFAULT'"),
+}
+
+
+# rospy's socket timeout (rospy.impl.masterslave): a call to an unreachable master or service ends after it
+BLOCKED_CALL_S = 60.0
+
+
+def judge_agent_reaction(log: dict[str, Any], wall_cut: datetime, wall_restore: Optional[datetime],
+                         wall_end: datetime, expect_home: bool, busy_at_cut: bool = False,
+                         lost_after_s: float = 5.0,
+                         home_after_s: float = 60.0, slack_s: float = 15.0) -> dict[str, Any]:
+    """Verdict on what a cut robot did by itself, from ``agent_log_window`` over [cut, end].
+
+    The agent (wall-clock watchdog) must log the heartbeat loss within ``lost_after_s + slack_s`` of the
+    cut; when the link stayed down long enough and the robot was flying (``expect_home``), it must have
+    started going home (or said why it could not) ``lost_after_s + home_after_s`` after the cut, or, when
+    a task was running (``busy_at_cut``), once that task ended (the watchdog preempts it, and goes home only
+    when no task runs) - within ``slack_s``. A task that never ends while cut (blocked in calls to the
+    unreachable ground station: in simulation the autopilot and pump are the simulator's, there; each call
+    only gives up after rospy's 60 s socket timeout) leaves the return home unverified: reported in
+    ``agent_unverified``, not a failure. After a restore the agent must log that the heartbeat is back.
+    Returns {"agent_ok", "agent_problems", "agent_checked", "agent_unverified"}.
+    """
+    ev = {k: [datetime.fromisoformat(x) for x in v] for k, v in (log.get("events") or {}).items()}
+    problems, checked = [], []
+
+    def within(name: str, t0: datetime, limit: Optional[float], not_before: float = 0.0) -> bool:
+        """A line of reaction ``name`` between t0 + not_before and t0 + limit (s)."""
+        return any(not_before <= (t - t0).total_seconds() and (limit is None or (t - t0).total_seconds() <= limit)
+                   for t in ev.get(name, []))
+
+    down_until = wall_restore or wall_end
+    if (down_until - wall_cut).total_seconds() >= lost_after_s + 5.0:   # it had the time to notice
+        checked.append("heartbeat_lost")
+        if not within("heartbeat_lost", wall_cut, lost_after_s + slack_s):
+            problems.append(f"its agent logged no heartbeat loss within {lost_after_s + slack_s:.0f} s (wall) "
+                            f"of the cut ({log.get('lines', 0)} lines logged while cut)")
+    home_at = lost_after_s + home_after_s
+    unverified = []
+    if expect_home and (down_until - wall_cut).total_seconds() >= home_at + slack_s:
+        ended = sorted((t - wall_cut).total_seconds() for t in ev.get("task_ended", []) if t >= wall_cut)
+        free_at = max(home_at, ended[0]) if busy_at_cut and ended else (None if busy_at_cut else home_at)
+        if free_at is None:
+            unverified.append("return home: the task it was running never ended while cut (blocked in calls "
+                              "to the unreachable ground station), so the watchdog could not start it")
+        elif (down_until - wall_cut).total_seconds() >= free_at + slack_s:
+            checked.append("return_home")
+            # not before the watchdog could order it: a go-home task cut short by the loss does not count
+            if not within("return_home", wall_cut, free_at + slack_s, not_before=home_at - 1.0):
+                problems.append(f"its agent did not start going home by {free_at + slack_s:.0f} s (wall) after "
+                                f"the cut (due at {home_at:.0f} s" + (f", its task ended at {free_at:.0f} s)"
+                                                                      if busy_at_cut else ")"))
+    if wall_restore is not None and (wall_end - wall_restore).total_seconds() >= 60.0:
+        checked.append("heartbeat_back")
+        if not within("heartbeat_back", wall_restore, None):
+            problems.append("its agent never logged the heartbeat back after the restore")
+    return {"agent_ok": not problems, "agent_problems": problems, "agent_checked": checked,
+            "agent_unverified": unverified}

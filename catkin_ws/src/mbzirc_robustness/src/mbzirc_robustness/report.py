@@ -210,5 +210,10 @@ def format_robustness(rep: dict[str, Any]) -> str:
                          f"heartbeat loss noticed: {'yes' if log['noticed_heartbeat_loss'] else 'NO'}"
                          + (f", back {sc['t_back'] - sc['t_restore']:.0f} s (sim) after the restore"
                             if sc.get("t_back") is not None and sc.get("t_restore") is not None else ""))
+            if sc.get("agent_checked"):
+                lines.append(f"    its own log checked for: {', '.join(sc['agent_checked'])}: "
+                             + ("ok" if sc.get("agent_ok") else "; ".join(sc.get("agent_problems") or [])))
+            for u in sc.get("agent_unverified") or []:
+                lines.append(f"    NOT VERIFIED: {u}")
     lines += [f"FAILED: {f}" for f in rep["failures"]]
     return "\n".join(lines)

@@ -132,3 +132,80 @@ def test_agent_log_window_finds_heartbeat_reaction_or_silence():
     assert w["heartbeat_lines"] == ["08:51:40 WARNING: central unit heartbeat lost: stopping the task safely"]
     quiet = F.agent_log_window(lines, datetime(2026, 11, 21, 8, 51, 41), datetime(2026, 11, 21, 8, 52, 30))
     assert quiet["lines"] == 0 and not quiet["noticed_heartbeat_loss"]
+
+
+def test_floor_released_while_silent_and_given_back_after_return_is_fine():
+    h = [status(10, {"2": True, "0": True}, {"2": "2"})] + \
+        [status(t, {"2": False, "0": True}, {}) for t in range(26, 81, 10)] + \
+        [status(90, {"2": True, "0": True}, {"2": "2"}, tasks={"2": "x"})]
+    r = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=80)
+    assert r["survived"] and r["floors_reassigned"] == ["f2"], r
+
+
+def test_status_gap_of_a_scheduled_central_unit_kill_is_not_the_cuts():
+    h = [status(t, {"3": t < 25}, {}) for t in (10, 25, 30, 35)] + [status(t, {"3": False}, {}) for t in (70, 75)]
+    assert not F.evaluate_link_cut(h, "3", t_cut=20, t_restore=None)["survived"]
+    r = F.evaluate_link_cut(h, "3", t_cut=20, t_restore=None, central_unit_kills=[40.0])
+    assert r["survived"], r
+
+
+def test_compare_tracks_after_an_estimator_restart():
+    before = {1: 4, 2: 1, 3: 3, 5: 0}
+    assert F.compare_tracks(before, dict(before))["same"]
+    aged = F.compare_tracks(before, {1: 4, 2: 3, 3: 1, 5: 0, 6: 1})     # ACTIVE <-> LOST, a new track
+    assert aged["same"] and aged["status_changes"] == {"2": [1, 3], "3": [3, 1]}
+    empty = F.compare_tracks(before, {})
+    assert not empty["same"] and empty["missing_ids"] == [1, 2, 3, 5] and "4 of 4 ids gone" in empty["detail"]
+    lost_final = F.compare_tracks(before, {1: 1, 2: 1, 3: 3, 5: 0})     # EXTINGUISHED forgotten
+    assert not lost_final["same"] and "statuses changed" in lost_final["detail"]
+
+
+def _log(*lines):
+    from datetime import datetime
+    return F.agent_log_window([f"[rosout][WARNING] 2026-11-21 10:{x},000: {text}\n" for x, text in lines],
+                              datetime(2026, 11, 21, 10, 0, 0), datetime(2026, 11, 21, 11, 0, 0))
+
+
+def test_judge_agent_reaction_permanent_cut():
+    from datetime import datetime
+    cut, end = datetime(2026, 11, 21, 10, 0, 0), datetime(2026, 11, 21, 10, 3, 0)
+    good = _log(("00:05", "central unit heartbeat lost: stopping the task safely"),
+                ("01:10", "State machine transitioning 'DEFAULT':'go_home_and_refill'-->'go_home_and_refill'"))
+    assert good["events"]["heartbeat_lost"] == ["2026-11-21T10:00:05.000"]
+    v = F.judge_agent_reaction(good, cut, None, end, expect_home=True)
+    assert v["agent_ok"] and v["agent_checked"] == ["heartbeat_lost", "return_home"], v
+    silent = _log(("00:01", "[follow_path/go_to] MOVING"))
+    v = F.judge_agent_reaction(silent, cut, None, end, expect_home=True)
+    assert not v["agent_ok"] and len(v["agent_problems"]) == 2
+    stuck = _log(("00:05", "central unit heartbeat lost: stopping the task safely"))
+    v = F.judge_agent_reaction(stuck, cut, None, end, expect_home=True)
+    assert not v["agent_ok"] and "going home" in v["agent_problems"][0]
+    assert F.judge_agent_reaction(stuck, cut, None, end, expect_home=False)["agent_ok"]      # landed: stays
+    early = _log(("00:02", "[go_home_and_refill/go_to] MOVING"), ("00:05", "heartbeat lost"))  # before the loss
+    assert not F.judge_agent_reaction(early, cut, None, end, expect_home=True)["agent_ok"]
+    late = _log(("00:05", "heartbeat lost"), ("02:30", "transitioning 'DEFAULT':'go_home_and_refill'"))  # 150 s
+    assert not F.judge_agent_reaction(late, cut, None, end, expect_home=True)["agent_ok"]
+    blocked = _log(("00:05", "heartbeat lost"), ("01:55", "State machine transitioning 'follow_path':'error'-->'DEFAULT'"),
+                   ("02:00", "State machine transitioning 'DEFAULT':'go_home_and_refill'-->'go_home_and_refill'"))
+    assert blocked["events"]["task_ended"] == ["2026-11-21T10:01:55.000"]                 # not the go_home line
+    assert not F.judge_agent_reaction(blocked, cut, None, end, expect_home=True)["agent_ok"]  # idle: due at 65 s
+    v = F.judge_agent_reaction(blocked, cut, None, end, expect_home=True, busy_at_cut=True)  # its task ended late
+    assert v["agent_ok"] and "return_home" in v["agent_checked"], v
+    v = F.judge_agent_reaction(stuck, cut, None, end, expect_home=True, busy_at_cut=True)    # task never ended
+    assert v["agent_ok"] and "return_home" not in v["agent_checked"] and "never ended" in v["agent_unverified"][0]
+    ended = _log(("00:05", "heartbeat lost"), ("00:06", "transitioning 'follow_path':'preempted'-->'DEFAULT'"))
+    v = F.judge_agent_reaction(ended, cut, None, end, expect_home=True, busy_at_cut=True)     # ended, never went
+    assert not v["agent_ok"] and "by 80 s" in v["agent_problems"][0]
+    short_end = datetime(2026, 11, 21, 10, 0, 30)                                        # too short to tell
+    assert F.judge_agent_reaction(stuck, cut, None, short_end, expect_home=True)["agent_checked"] == ["heartbeat_lost"]
+
+
+def test_judge_agent_reaction_temporary_cut_needs_heartbeat_back():
+    from datetime import datetime
+    cut, restore, end = (datetime(2026, 11, 21, 10, 0, s) for s in (0, 20, 0))
+    end = datetime(2026, 11, 21, 10, 3, 0)
+    back = _log(("00:05", "central unit heartbeat lost"), ("00:30", "central unit heartbeat back: accepting goals"))
+    v = F.judge_agent_reaction(back, cut, restore, end, expect_home=True)
+    assert v["agent_ok"] and v["agent_checked"] == ["heartbeat_lost", "heartbeat_back"], v
+    never = _log(("00:05", "central unit heartbeat lost"))
+    assert "never logged the heartbeat back" in F.judge_agent_reaction(never, cut, restore, end, True)["agent_problems"][0]
