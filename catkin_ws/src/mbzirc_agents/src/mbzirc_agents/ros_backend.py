@@ -11,6 +11,10 @@ from typing import Any, Callable
 import actionlib
 import rospy
 
+from .bounded_call import BoundedCall
+
+SERVICE_TIMEOUT = 5.0    # s (wall) before a service call of an agent gives up
+
 
 class RosBackend:
     """rospy implementation of the backend used by AgentInterface and Agent."""
@@ -28,8 +32,10 @@ class RosBackend:
         return rospy.Service(name, srv_type, handler)
 
     def service_proxy(self, name: str, srv_type: Any) -> Any:
-        """A rospy.ServiceProxy (not persistent: the server may restart)."""
-        return rospy.ServiceProxy(name, srv_type)
+        """A rospy.ServiceProxy (not persistent: the server may restart), bounded in wall time
+        (`~service_timeout`, 5 s; see bounded_call)."""
+        timeout = float(rospy.get_param('~service_timeout', SERVICE_TIMEOUT))
+        return BoundedCall(name, rospy.ServiceProxy(name, srv_type), timeout)
 
     def action_server(self, name: str, action: Any, execute_cb: Callable[[Any], None]) -> Any:
         """A started actionlib SimpleActionServer."""
