@@ -8,7 +8,7 @@ while pumping (a fire never in sight is not a fire put out).
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import Callable, Optional
 
 from .. import constants as C
 
@@ -33,3 +33,14 @@ class ColdConfirmation:
     @property
     def out(self) -> bool:
         return self.seen_hot and self.cold_in_row >= self.checks
+
+    def settle(self, answer: Callable[[], Optional[bool]], sleep: Callable[[float], None],
+               period: float = 0.5) -> bool:
+        """After the tank ran dry: keep asking (up to 2 x `checks` answers, `period` s apart) whether the
+        last water put the fire out; a fire still filtering its last hot frames must not count as "still
+        hot"."""
+        for _ in range(2 * self.checks):
+            if self.update(answer()):
+                return True
+            sleep(period)
+        return self.out

@@ -281,7 +281,9 @@ class ExtinguishFacadeFire(AgentTask):
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
             if a.water_empty():
-                return a.fire_detected() is False
+                a.stop_pump()
+                a.hold()                                # no velocity loop while we wait for the answers
+                return cold.settle(a.fire_detected, self.sleep)   # did the last water do it?
             if centred_once and now - last_check >= 0.5:   # once water flowed: is the fire still hot?
                 last_check = now
                 if cold.update(a.fire_detected()):

@@ -158,10 +158,10 @@ class ExtinguishIndoorFire(AgentTask):
                 self.sleep(0.5)
                 if cold.update(a.fire_detected()):
                     break
-            else:
-                cold.update(a.fire_detected())          # tank empty: one last look
         finally:
             a.stop_pump()
+        if not cold.out:                                # tank empty: did the last water do it?
+            cold.settle(a.fire_detected, self.sleep)
         if cold.out:
             a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         water = a.water_level if math.isfinite(a.water_level) else 0.0
