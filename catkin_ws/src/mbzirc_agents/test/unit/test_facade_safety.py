@@ -97,6 +97,24 @@ def test_stops_pumping_when_the_fire_goes_cold(scene):
     assert sc.statuses == [C.STATUS_EXTINGUISHED]
 
 
+def test_cold_answers_off_the_hole_do_not_count(scene):
+    """The hole moves aside once water flows and the UAV cannot follow (frozen): the pump stops and the
+    thermal camera, off the fire, answers "no fire"; that must not make the fire extinguished."""
+    agent, ual, be, sc = scene
+    agent.p['extinguish_timeout'] = 8.0
+    sc.hot = lambda: bool(ual.pump)               # seen only while centred and pumping
+
+    def move_hole_once_pumping():
+        while not ual.pump and not sc.stop:
+            time.sleep(0.02)
+        ual.speedup = 0.0                          # frozen: it cannot re-centre, no more water flows
+        sc.hole = np.array(HOLDER) + np.array([0.0, 0.45, 0.0])
+    threading.Thread(target=move_hole_once_pumping, daemon=True).start()
+    s, status = extinguish(be)
+    assert status == 'aborted' and 'not done after' in s.result.message, (status, s.result.message)
+    assert sc.statuses == []
+
+
 def test_hot_fire_empties_the_tank_and_stays_active(scene):
     agent, ual, be, sc = scene
     s, status = extinguish(be)
