@@ -87,7 +87,12 @@ class FireDetectorNode:
         rng = front_laser_range(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,
                                 msg.range_max, self.detector.config.angle_amplitude)
         if rng is None:
-            rospy.logerr_throttle(THROTTLE_S, "fire_detector: no valid front beam in scan (NaN/inf/out of range or malformed)")
+            if (not msg.ranges or not np.isfinite(msg.angle_increment) or msg.angle_increment == 0.0
+                    or msg.range_min > msg.range_max
+                    or np.isnan(np.asarray(msg.ranges, dtype=float)).any()):
+                rospy.logerr_throttle(THROTTLE_S, "fire_detector: malformed scan (no ranges, NaN or bad angles)")
+            else:   # nothing within range ahead (open sky, on the ground): normal, only no forward fire
+                rospy.logdebug_throttle(THROTTLE_S, "fire_detector: nothing within laser range ahead")
         with self.lock:
             self.laser_range = rng
 
