@@ -284,9 +284,11 @@ class ExtinguishFacadeFire(AgentTask):
                 a.stop_pump()
                 a.hold()                                # no velocity loop while we wait for the answers
                 return cold.settle(a.fire_detected, self.sleep)   # did the last water do it?
-            if pumping_since is not None and now - last_check >= 0.5:   # water flowing: still hot?
-                # only while centred and pumping: off the hole the thermal camera may not see the fire
-                # (seen: 6 "cold" answers while re-centring after a hole switch, fire 10 % full)
+            if pumping_since is not None and last_centred == now and now - last_check >= 0.5:
+                # water flowing into the hole now: is the fire still hot? Only then: off the hole the
+                # thermal camera may not see the fire (seen: 6 "cold" answers while re-centring after a
+                # hole switch, fire 10 % full), and cold answers while the wind holds the jet beside the
+                # hole leave a nearly quenched fire unfinished (seen: 99.5 %)
                 last_check = now
                 if cold.update(a.fire_detected()):
                     return True                         # cold: stop pumping, keep the rest of the tank
