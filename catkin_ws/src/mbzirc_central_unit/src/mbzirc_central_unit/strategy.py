@@ -237,6 +237,10 @@ class Strategy:
                 continue
             if self._waiting_for_reported_fires(agent_id, world) or self.broken(agent_id):
                 continue
+            if a.ual_state == C.UAL_UNINITIALIZED and agent_id not in self.seen_flying:
+                # its autopilot (UAL) has not reported yet, e.g. the simulator is still starting: a goal
+                # now fails at once, and three such failures made the UGV give up its job (seen)
+                continue
             if not a.is_uav:
                 cmd = self._decide_ugv(a, world)
             elif a.payload == C.PAYLOAD_BLANKET:

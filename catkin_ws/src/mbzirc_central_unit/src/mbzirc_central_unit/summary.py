@@ -44,6 +44,7 @@ class MissionRecord:
     tracks: dict[str, list[tuple[float, float, float, float]]] = field(default_factory=dict)
     crashes: list[str] = field(default_factory=list)
     min_separation: float = math.inf
+    closest_approach: dict = field(default_factory=dict)   # who, when and where min_separation happened
     elapsed: float = 0.0
     robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
 
@@ -69,7 +70,12 @@ class MissionRecord:
         tr.append((t, x, y, z))
         for other, otr in self.tracks.items():
             if other != robot and otr and abs(otr[-1][0] - t) <= 1.0 and max(z, otr[-1][3]) > 0.3:
-                self.min_separation = min(self.min_separation, math.dist((x, y, z), otr[-1][1:]))
+                d = math.dist((x, y, z), otr[-1][1:])
+                if d < self.min_separation:
+                    self.min_separation = d
+                    self.closest_approach = {"robots": sorted([robot, other]), "t": round(t, 1),
+                                             "positions": {robot: [round(v, 2) for v in (x, y, z)],
+                                                           other: [round(v, 2) for v in otr[-1][1:]]}}
 
     def nearest_robot(self, p: tuple[float, float, float], kind: str) -> Optional[str]:
         """The robot closest to p now: who put the fire out (blanket robots for ground fires)."""
@@ -123,6 +129,7 @@ class MissionRecord:
             "crashes": list(self.crashes),
             "all_out_time_s": round(max(times), 2) if self.all_out() and times else None,
             "min_separation_m": round(self.min_separation, 3) if math.isfinite(self.min_separation) else None,
+            "closest_approach": self.closest_approach or None,
             "end_reason": end_reason,
             "fires": [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "extinguished_by": f.extinguished_by,
                        "t_extinguished": None if f.t_extinguished is None else round(f.t_extinguished, 2),

@@ -381,6 +381,18 @@ def test_a_floor_stays_taken_while_the_uav_that_left_it_is_still_there():
     assert s2.indoor_owner.get(1) == "3" and "indoor fire 42" in cmds["3"].reason
 
 
+def test_no_goal_before_the_robot_s_autopilot_reported():
+    """At start-up the data_feed may come before the UAL's first state (UNINITIALIZED): no goal then
+    (it would fail at once, and three failures made the UGV give up its job)."""
+    s = Strategy()
+    ugv = AgentView("0", C.ROBOT_UGV, C.PAYLOAD_WATER, 4.0, -4.0, 0.0, ual_state=C.UAL_UNINITIALIZED,
+                    water_level=2.0, last_seen=0.0)
+    assert s.decide(WorldView(0.0, {"0": ugv}, {})) == []
+    ugv.ual_state = C.UAL_LANDED_ARMED
+    (cmd,) = s.decide(WorldView(0.5, {"0": ugv}, {}))
+    assert cmd.agent_id == "0" and cmd.task == C.SEARCH_INDOOR
+
+
 def test_a_transit_starting_near_the_ground_climbs_first():
     s = Strategy()
     a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,
