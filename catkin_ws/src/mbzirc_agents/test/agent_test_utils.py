@@ -76,3 +76,20 @@ class SimRobots:
         for a in range(len(vals)):
             for b in range(a + 1, len(vals)):
                 self.min_distance = min(self.min_distance, math.dist(vals[a], vals[b]))
+
+
+class SimFires:
+    """Ground truth of the fires and crashes from /sim/fires and /sim/score (tests only; agents never read
+    /sim). `fires` is the latest FireStateArray, `crashed` the crashed robots' ids."""
+
+    def __init__(self, wait=60.0):
+        from ual_sim.msg import FireStateArray, Score
+        self.fires = None
+        self.crashed = []
+        rospy.Subscriber('/sim/fires', FireStateArray, lambda m: setattr(self, 'fires', m))
+        rospy.Subscriber('/sim/score', Score, lambda m: setattr(self, 'crashed', list(m.crashed_robots)))
+        assert wait_wall(lambda: self.fires is not None, wait), 'no /sim/fires'
+
+    def fire(self, fid):
+        """The FireState of holder fid."""
+        return [f for f in self.fires.fires if f.id == fid][0]

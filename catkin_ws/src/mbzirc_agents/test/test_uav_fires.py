@@ -7,8 +7,7 @@ import unittest
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
-from agent_test_utils import pose, run, wait_wall
-from ual_sim.msg import FireStateArray, Score
+from agent_test_utils import SimFires, pose, run, wait_wall
 
 from mbzirc_agents import constants as C
 from mbzirc_agents.geometry import facade_standoff
@@ -18,17 +17,13 @@ class TestUavFires(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node('test_uav_fires')
-        cls.fires = None
-        cls.crashed = []
-        rospy.Subscriber('/sim/fires', FireStateArray, lambda m: setattr(cls, 'fires', m))
-        rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
-        assert wait_wall(lambda: cls.fires is not None, 60), 'no /sim/fires'
+        cls.sim = SimFires()
 
     def fire(self, fid):
-        return [f for f in self.fires.fires if f.id == fid][0]
+        return self.sim.fire(fid)
 
     def test_1_facade_search_and_water(self):
-        floor0 = [f for f in self.fires.fires if f.kind == 0 and f.floor == 0]
+        floor0 = [f for f in self.sim.fires.fires if f.kind == 0 and f.floor == 0]
         active = [f for f in floor0 if f.active][0]
         cold = [f for f in floor0 if not f.active][0]
         state, res = run(2, 'take_off', 'TakeOff', 60, height=3.0)
@@ -55,10 +50,10 @@ class TestUavFires(unittest.TestCase):
         state, res = run(2, 'go_home_and_refill', 'GoHomeAndRefill', 150)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         self.assertGreater(res.water_level, 1.9)
-        self.assertEqual(self.crashed, [])
+        self.assertEqual(self.sim.crashed, [])
 
     def test_2_ground_fire_with_blanket(self):
-        ground = [f for f in self.fires.fires if f.kind == 1 and f.active]
+        ground = [f for f in self.sim.fires.fires if f.kind == 1 and f.active]
         target = min(ground, key=lambda f: math.hypot(f.position.x + 2, f.position.y - 1.65))
         state, res = run(1, 'take_off', 'TakeOff', 60, height=4.0)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
@@ -73,7 +68,7 @@ class TestUavFires(unittest.TestCase):
         state, res = run(1, 'go_home_and_refill', 'GoHomeAndRefill', 150)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         self.assertTrue(res.has_blanket)
-        self.assertEqual(self.crashed, [])
+        self.assertEqual(self.sim.crashed, [])
 
 
 if __name__ == '__main__':

@@ -4,7 +4,6 @@
 The goals are the central unit's (its layout: room, window entry, viewpoints); the UAV has no knowledge
 of which holder burns: it must find it with its thermal camera.
 """
-import math
 import os
 import sys
 import unittest
@@ -12,10 +11,10 @@ import unittest
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
-from ual_sim.msg import FireState, FireStateArray, Score
+from ual_sim.msg import FireState
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'mbzirc_agents', 'test'))
-from agent_test_utils import pose, run, wait_wall  # noqa: E402
+from agent_test_utils import SimFires, pose, run  # noqa: E402
 
 from mbzirc_central_unit import geometry as G  # noqa: E402
 from mbzirc_central_unit.layout import Layout  # noqa: E402
@@ -27,17 +26,11 @@ class TestIndoorFires(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node('test_indoor_fires')
-        cls.fires, cls.crashed = None, []
-        rospy.Subscriber('/sim/fires', FireStateArray, lambda m: setattr(cls, 'fires', m))
-        rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
-        assert wait_wall(lambda: cls.fires is not None, 60), 'no /sim/fires'
-
-    def truth(self, fid):
-        return [f for f in self.fires.fires if f.id == fid][0]
+        cls.sim = SimFires()
 
     def test_indoor_fire_through_a_window(self):
         FLOOR = int(rospy.get_param('~floor', 1))
-        active = [f for f in self.fires.fires if f.kind == FireState.INDOOR and f.active and f.floor == FLOOR][0]
+        active = [f for f in self.sim.fires.fires if f.kind == FireState.INDOOR and f.active and f.floor == FLOOR][0]
         layout = Layout()
         # the room searched is the one the strategy would search first for that holder (the test knows the
         # active holder only to pick the room; the UAV is told nothing about it)
@@ -59,11 +52,11 @@ class TestIndoorFires(unittest.TestCase):
         state, res = run(UAV, 'extinguish_indoor_fire', 'ExtinguishIndoorFire', 150, fire_id=res.fire_ids[0])
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         rospy.sleep(1.0)
-        truth = self.truth(active.id)
+        truth = self.sim.fire(active.id)
         self.assertTrue(res.extinguished, res.message)
         self.assertTrue(truth.extinguished, f'{active.id} progress {truth.progress:.3f} after "{res.message}", '
                                             f'{res.water_left:.2f} L left')
-        self.assertEqual(self.crashed, [])
+        self.assertEqual(self.sim.crashed, [])
 
 
 if __name__ == '__main__':

@@ -104,3 +104,16 @@ class FakeUal:
             if 'actuators_system/water_level' in subs:
                 subs['actuators_system/water_level'](Float32(data=water))
             time.sleep(dt)
+
+
+def start_uav(backend, params=None, speedup=4.0):
+    """A started UavAgent '2' (regions time out after 5 s unless params say otherwise) on a FakeUal, once
+    its first pose arrived: the set-up every UAV task test needs. Returns (agent, ual)."""
+    from mbzirc_agents.uav_agent import UavAgent
+    agent = UavAgent('2', backend, {'region_timeout': 5.0, **(params or {})})
+    ual = FakeUal(backend, speedup=speedup)
+    agent.start()
+    deadline = time.monotonic() + 2
+    while agent.pose is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    return agent, ual

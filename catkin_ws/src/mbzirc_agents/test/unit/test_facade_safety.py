@@ -16,10 +16,9 @@ from mbzirc_comm_objs.srv import CheckFireResponse
 from sensor_msgs.msg import LaserScan
 
 from fake_backend import FakeBackend
-from fake_ual import FakeUal
+from fake_ual import start_uav
 from mbzirc_agents import constants as C
 from mbzirc_agents.control import HoleCentering, front_distance
-from mbzirc_agents.uav_agent import UavAgent
 
 HOLDER = (11.4, 8.5, 6.0)          # west face; standoff at x = 11.4 - 1.5, facing +x (yaw 0)
 
@@ -56,13 +55,8 @@ class Scene:
 @pytest.fixture
 def scene():
     be = FakeBackend()
-    agent = UavAgent('2', be, {'region_timeout': 5.0})
-    ual = FakeUal(be, speedup=4.0)
-    agent.start()
+    agent, ual = start_uav(be, speedup=4.0)
     sc = Scene(be, ual)
-    deadline = time.monotonic() + 2
-    while agent.pose is None and time.monotonic() < deadline:
-        time.sleep(0.02)
     s = be.servers['take_off_action']
     s.send(TakeOffGoal(height=3.0))
     assert s.wait(10) == 'succeeded'

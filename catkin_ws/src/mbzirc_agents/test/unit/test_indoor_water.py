@@ -7,9 +7,8 @@ from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList, T
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
-from fake_ual import FakeUal
+from fake_ual import start_uav
 from mbzirc_agents import constants as C
-from mbzirc_agents.uav_agent import UavAgent
 
 
 class Scene:
@@ -17,17 +16,12 @@ class Scene:
 
     def __init__(self, hot_until=0.0, num_updates=50, std=0.2):
         self.be = FakeBackend()
-        self.agent = UavAgent('2', self.be, {'check_fire_time': 1.0, 'top_up_time': 1.0, 'region_timeout': 5.0})
-        self.ual = FakeUal(self.be, speedup=2.0)
         self.statuses = []
         self.hot_until = hot_until
         self.pumping_since = None
         self.be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
         self.be.handlers['/set_object_status'] = lambda r: self.statuses.append(r.object_status) or type('R', (), {})()
-        self.agent.start()
-        deadline = time.monotonic() + 2
-        while self.agent.pose is None and time.monotonic() < deadline:
-            time.sleep(0.02)
+        self.agent, self.ual = start_uav(self.be, {'check_fire_time': 1.0, 'top_up_time': 1.0}, speedup=2.0)
         s = self.be.servers['take_off_action']
         s.send(TakeOffGoal(height=6.5))
         assert s.wait(10) == 'succeeded'

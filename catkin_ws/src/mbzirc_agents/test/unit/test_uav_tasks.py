@@ -8,20 +8,14 @@ from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import GoToGoal, Object, ObjectList, TakeOffGoal, ExtinguishFacadeFireGoal, LandGoal
 
 from fake_backend import FakeBackend
-from fake_ual import FakeUal
+from fake_ual import start_uav
 from mbzirc_agents import constants as C
-from mbzirc_agents.uav_agent import UavAgent
 
 
 @pytest.fixture
 def uav():
     be = FakeBackend()
-    agent = UavAgent('2', be, {'region_timeout': 5.0})
-    ual = FakeUal(be, speedup=8.0)
-    agent.start()
-    deadline = time.monotonic() + 2
-    while agent.pose is None and time.monotonic() < deadline:
-        time.sleep(0.02)
+    agent, ual = start_uav(be, speedup=8.0)
     yield agent, ual, be
     be.shutdown = True
     ual.stop = True
