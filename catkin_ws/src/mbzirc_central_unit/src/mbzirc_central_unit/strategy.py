@@ -89,6 +89,7 @@ class Strategy:
         self.pending_ids: dict[str, tuple[set[int], int]] = {}
         self.consecutive_failures: Counter[str] = Counter()
         self.seen_flying: set[str] = set()
+        self.seen_ready: set[str] = set()   # agents whose UAL reported a state (not UNINITIALIZED) once
         self.crashed: set[str] = set()  # robots seen moving, now UNINITIALIZED: the simulator's crash state
 
     # ---- bookkeeping -----------------------------------------------------------------------------
@@ -237,9 +238,12 @@ class Strategy:
                 continue
             if self._waiting_for_reported_fires(agent_id, world) or self.broken(agent_id):
                 continue
-            if a.ual_state == C.UAL_UNINITIALIZED and agent_id not in self.seen_flying:
+            if a.ual_state != C.UAL_UNINITIALIZED:
+                self.seen_ready.add(agent_id)
+            elif agent_id not in self.seen_ready and agent_id not in self.seen_flying:
                 # its autopilot (UAL) has not reported yet, e.g. the simulator is still starting: a goal
-                # now fails at once, and three such failures made the UGV give up its job (seen)
+                # now fails at once, and three such failures made the UGV give up its job (seen). Only
+                # until its first state: UNINITIALIZED later is the crash state, handled as before
                 continue
             if not a.is_uav:
                 cmd = self._decide_ugv(a, world)
