@@ -26,6 +26,11 @@ DEPTH_SCALE_16UC1 = 0.001  # 16UC1 depth is in millimetres; 0 means no data
 RIM_INNER = 1.05
 RIM_OUTER = 1.35
 RIM_MIN_VALID = 5  # depth pixels needed in the annulus
+# Extension: is a circle an opening (the hole, with the fire's container behind) or painted (a decoy)? The
+# depth of the middle of the disc (within INSIDE_RADIUS of its radius) is compared with the rim's.
+INSIDE_RADIUS = 0.5
+INSIDE_MIN_VALID = 3       # depth pixels needed in the middle
+OPENING_MIN_DEPTH = 0.1    # m behind the rim for a circle to count as an opening (the container: ~0.3 m)
 
 # Choosing the hole to shoot among circles on one facade holder (hole in the middle, decoys each side):
 TRIPLE_MAX_RADIUS_RATIO = 1.6     # largest/smallest radius of the three

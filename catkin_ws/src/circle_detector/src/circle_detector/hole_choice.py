@@ -1,10 +1,12 @@
-"""Which circle is the hole to shoot: the middle one of three circles in a row (a hole between decoys).
+"""Which circle is the hole to shoot: the one the depth camera sees through, else the middle one of three
+circles in a row (a hole between decoys).
 
 Pure functions on (x, y, z, radius) tuples, so that agents can use them on detections in the camera
 optical frame (x right, y down, z forward) without importing OpenCV or ROS.
 """
 from __future__ import annotations
 
+import math
 from itertools import combinations
 from typing import Optional, Sequence, Tuple
 
@@ -63,3 +65,32 @@ def choose_middle_hole(circles: Sequence[CircleXYZR]) -> Optional[int]:
         if best is None or score < best[0]:
             best = (score, middle)
     return None if best is None else best[1]
+
+
+def is_opening(opening_m: float) -> bool:
+    """A circle whose middle lies at least C.OPENING_MIN_DEPTH behind its rim: a hole, not a painted decoy."""
+    return math.isfinite(opening_m) and opening_m >= C.OPENING_MIN_DEPTH
+
+
+def is_painted(opening_m: float) -> bool:
+    """A circle whose middle is known to lie on its rim's surface: a decoy (NaN: unknown, not painted)."""
+    return math.isfinite(opening_m) and opening_m < C.OPENING_MIN_DEPTH
+
+
+def choose_hole(circles: Sequence[CircleXYZR], openings: Optional[Sequence[float]] = None) -> Optional[int]:
+    """Index in `circles` of the hole to shoot, or None when no choice is safe.
+
+    `openings` (m, per circle, NaN unknown; see hough.Circle.opening_m) is the stronger evidence: the
+    middle of a triple is taken unless it is known painted; with no usable triple, the single circle
+    the depth camera sees through is taken (e.g. a holder at a building corner, where the decoy beyond
+    the corner is out of sight). Without openings this is choose_middle_hole.
+    """
+    middle = choose_middle_hole(circles)
+    if openings is None:
+        return middle
+    if len(openings) != len(circles):
+        raise ValueError(f"{len(openings)} openings for {len(circles)} circles")
+    open_ones = [i for i, o in enumerate(openings) if is_opening(o)]
+    if middle is not None and not is_painted(openings[middle]):
+        return middle
+    return open_ones[0] if len(open_ones) == 1 else None

@@ -64,6 +64,9 @@ class Circle:
     y: float
     z: float
     radius_m: float
+    # extension: how far (m, along the optical axis) the middle of the disc lies behind its rim: about
+    # the container depth for a real hole, about 0 for a painted decoy; NaN when the depth has no data
+    opening_m: float = float("nan")
 
 
 def depth_to_metres(depth: np.ndarray, encoding: str) -> np.ndarray:
@@ -79,23 +82,33 @@ def depth_to_metres(depth: np.ndarray, encoding: str) -> np.ndarray:
     raise ValueError(f"unsupported depth encoding {encoding!r} (expected 16UC1 or 32FC1)")
 
 
-def _rim_depth(depth_m: np.ndarray, u: float, v: float, r: float) -> Optional[float]:
-    """Median valid depth of the annulus just outside the circle (the facade around the hole)."""
-    ro = r * C.RIM_OUTER
+def _annulus_depth(depth_m: np.ndarray, u: float, v: float, r_in: float, r_out: float,
+                   min_valid: int) -> Optional[float]:
+    """Median valid depth of the pixels between r_in and r_out (px) around (u, v), or None."""
     h, w = depth_m.shape
-    x0, x1 = max(0, int(u - ro)), min(w, int(u + ro) + 1)
-    y0, y1 = max(0, int(v - ro)), min(h, int(v + ro) + 1)
+    x0, x1 = max(0, int(u - r_out)), min(w, int(u + r_out) + 1)
+    y0, y1 = max(0, int(v - r_out)), min(h, int(v + r_out) + 1)
     if x0 >= x1 or y0 >= y1:
         return None
     patch = depth_m[y0:y1, x0:x1]
     yy, xx = np.mgrid[y0:y1, x0:x1]
     d2 = (xx - u) ** 2 + (yy - v) ** 2
-    ring = (d2 >= (r * C.RIM_INNER) ** 2) & (d2 <= ro ** 2)
-    vals = patch[ring]
+    vals = patch[(d2 >= r_in ** 2) & (d2 <= r_out ** 2)]
     vals = vals[np.isfinite(vals)]
-    if vals.size < C.RIM_MIN_VALID:
+    if vals.size < min_valid:
         return None
     return float(np.median(vals))
+
+
+def _rim_depth(depth_m: np.ndarray, u: float, v: float, r: float) -> Optional[float]:
+    """Median valid depth of the annulus just outside the circle (the facade around the hole)."""
+    return _annulus_depth(depth_m, u, v, r * C.RIM_INNER, r * C.RIM_OUTER, C.RIM_MIN_VALID)
+
+
+def _inside_depth(depth_m: np.ndarray, u: float, v: float, r: float) -> float:
+    """Median depth of the middle of the disc (NaN when unknown): behind the rim for a real opening."""
+    d = _annulus_depth(depth_m, u, v, 0.0, max(1.0, r * C.INSIDE_RADIUS), C.INSIDE_MIN_VALID)
+    return float("nan") if d is None else d
 
 
 def _radius_bounds(p: HoughParams, px_per_m_near: float, px_per_m_far: float, s: int) -> Tuple[int, int]:
@@ -180,5 +193,8 @@ def detect_circles(color_bgr: np.ndarray, depth_m: np.ndarray, K: Intrinsics, p:
             radius_m = r_px * z / K.fx
         if not (0 < pt[2] < p.max_depth_th) or not (p.min_radius_meters <= radius_m <= p.max_radius_meters):
             continue
-        out.append(Circle(float(u), float(v), float(r_px), float(pt[0]), float(pt[1]), float(pt[2]), float(radius_m)))
+        # the opening is read along the same ray as the centre: depth of the middle minus depth of the rim
+        opening = _inside_depth(depth_m, u, v, r_px) - float(pt[2])
+        out.append(Circle(float(u), float(v), float(r_px), float(pt[0]), float(pt[1]), float(pt[2]),
+                          float(radius_m), float(opening)))
     return out

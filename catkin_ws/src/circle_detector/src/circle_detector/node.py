@@ -1,6 +1,7 @@
 """ROS adapter of the circle detector: synchronised colour + depth in, TYPE_HOLE sensed_objects out."""
 from __future__ import annotations
 
+import math
 import threading
 from typing import List, Optional
 
@@ -13,7 +14,7 @@ from sensor_msgs.msg import CameraInfo, Image
 from visualization_msgs.msg import Marker
 
 from circle_detector import constants as C
-from circle_detector.hole_choice import choose_middle_hole
+from circle_detector.hole_choice import choose_hole
 from circle_detector.hough import Circle, HoughParams, Intrinsics, depth_to_metres, detect_circles
 from circle_detector.images import image_to_array, to_bgr
 
@@ -152,7 +153,7 @@ class CircleDetectorNode:
 
     def publish(self, color: Image, circles: List[Circle], bgr: np.ndarray) -> None:
         stamp, frame = color.header.stamp, color.header.frame_id
-        middle = choose_middle_hole([(c.x, c.y, c.z, c.radius_m) for c in circles])
+        middle = choose_hole([(c.x, c.y, c.z, c.radius_m) for c in circles], [c.opening_m for c in circles])
         chosen = circles if not self.select_middle_hole else ([circles[middle]] if middle is not None else [])
         out = ObjectDetectionList(agent_id=self.agent_id, stamp=stamp)
         for c in chosen:
@@ -163,6 +164,12 @@ class CircleDetectorNode:
             det.pose.pose.orientation.w = 1.0
             det.relative_position.x, det.relative_position.y, det.relative_position.z = c.x, c.y, c.z
             det.scale.x = det.scale.y = det.scale.z = c.radius_m
+            if math.isfinite(c.opening_m):
+                # extension: the point seen through the middle of the circle (same ray, opening_m
+                # further along the optical axis); all zeros when the depth had no data there
+                k = (c.z + c.opening_m) / c.z
+                det.point_of_interest.x, det.point_of_interest.y, det.point_of_interest.z = \
+                    c.x * k, c.y * k, c.z * k
             out.objects.append(det)
         self.pub.publish(out)
         if middle is not None:

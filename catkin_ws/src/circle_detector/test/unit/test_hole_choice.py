@@ -52,3 +52,24 @@ def test_two_holders_best_aligned_wins():
     good = row(x0=-0.55)
     bad = [(1.2, 0.3, 3.0, 0.12), (1.8, 0.0, 3.0, 0.12), (2.4, 0.45, 3.0, 0.12)]
     assert choose_middle_hole(bad + good) == 4
+
+
+def test_openings_are_the_stronger_evidence():
+    """The depth seen through a circle (opening, m) decides where the triple cannot or is wrong."""
+    from circle_detector.hole_choice import choose_hole
+    nan = float("nan")
+    c = row()
+    assert choose_hole(c) == 1 and choose_hole(c, [nan] * 3) == 1           # no depth: the middle
+    assert choose_hole(c, [0.0, 0.3, 0.0]) == 1
+    assert choose_hole(c, [0.3, 0.0, 0.0]) == 0                              # middle painted: the opening
+    assert choose_hole(c, [0.3, 0.0, 0.3]) is None                           # ambiguous: no choice
+    two = row(2)                                                             # corner holder: one decoy hidden
+    assert choose_hole(two) is None and choose_hole(two, [nan, nan]) is None
+    assert choose_hole(two, [0.0, 0.28]) == 1 and choose_hole(two, [0.29, 0.02]) == 0
+    assert choose_hole(two, [0.05, 0.02]) is None                            # both painted
+    try:
+        choose_hole(c, [0.0])
+    except ValueError:
+        pass
+    else:
+        raise AssertionError("mismatched openings accepted")

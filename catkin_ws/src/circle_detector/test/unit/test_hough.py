@@ -30,6 +30,19 @@ def test_named_holder_three_circles_and_middle_is_the_hole():
     assert hole.radius_m == pytest.approx(scene.radius, rel=0.2)
 
 
+@pytest.mark.parametrize("rectify", [True, False])
+def test_depth_through_the_hole_tells_it_from_the_decoys(rectify):
+    """opening_m: the middle of the real hole lies ~0.3 m (the container) behind its rim, a decoy's on it."""
+    scene = S.NAMED_SCENES["facade_holder"]
+    circles = detect(scene, rectify=rectify)
+    assert len(circles) == 3
+    hole = min(circles, key=lambda c: np.linalg.norm(np.subtract((c.x, c.y, c.z), scene.hole_cam)))
+    assert hole.opening_m == pytest.approx(S.HOLE_DEPTH, abs=0.1)
+    for c in circles:
+        if c is not hole:
+            assert abs(c.opening_m) < 0.05
+
+
 def test_plain_wall_has_no_circle():
     assert detect(S.NAMED_SCENES["plain_wall"]) == []
 

@@ -85,7 +85,9 @@ YAW_TOLERANCE = 0.15            # rad
 FACADE_STANDOFF = 2.0           # m in front of a facade fire holder
 
 # extinguish_facade_fire safety (why: estimates that jump or drift flew UAVs into the wall)
+POSE_HISTORY_LEN = 200          # poses kept for pose_at (several seconds at the UAL's 30-50 Hz)
 HOLE_JUMP_MAX = 1.5             # m: a hole position further than this from the locked one -> abort
+HOLE_SAME_MAX = 0.35            # m: a circle this close to the locked hole is that hole (decoys: 0.7 m aside)
 COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out; the
 #                                 water keeps flowing meanwhile: a nearly quenched heater reads cold while its
 #                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)

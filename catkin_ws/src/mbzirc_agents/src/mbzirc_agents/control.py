@@ -145,13 +145,3 @@ def yaw_rate_to(current_yaw: float, target_yaw: float, gain: float = 1.0, max_ra
     return float(np.clip(gain * e, -max_rate, max_rate))
 
 
-def pick_hole(holes_body: Sequence[Sequence[float]]) -> Optional[np.ndarray]:
-    """The hole to aim at among detected circles: the middle one of a row of three, else the nearest
-    to the image centre line (smallest |y|, |z|). Used when the circle detector sends every circle."""
-    if not holes_body:
-        return None
-    pts = np.asarray(holes_body, dtype=float)
-    if len(pts) >= 3:
-        order = np.argsort(pts[:, 1])
-        return pts[order[len(order) // 2]]
-    return pts[np.argmin(np.hypot(pts[:, 1], pts[:, 2]))]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import deque
 from typing import Any, Dict, Optional, Sequence
 
 import numpy as np
@@ -82,6 +83,8 @@ class RobotAgent(Agent):
         self.state_lock = threading.Lock()
         self.pose: Optional[np.ndarray] = None          # x, y, z, yaw
         self.pose_msg: Optional[PoseStamped] = None
+        # (stamp s, pose) of the last seconds: detections are placed with the pose at their image's time
+        self.pose_history: deque = deque(maxlen=C.POSE_HISTORY_LEN)
         self.ual_state = C.UAL_UNINITIALIZED
         self.water_level = float('nan')
         self.blanket_attached = False
@@ -138,9 +141,13 @@ class RobotAgent(Agent):
         if yaw is None or not all(map(math.isfinite, vals)):
             self.backend.logerr_throttle(5.0, 'ual/pose: NaN or invalid orientation, ignored')
             return
+        stamp = msg.header.stamp.to_sec() or self.backend.now()
         with self.state_lock:
             self.pose = np.array([p.x, p.y, p.z, yaw])
             self.pose_msg = msg
+            if self.pose_history and stamp < self.pose_history[-1][0]:
+                self.pose_history.clear()           # time went back (bag loop, sim restart)
+            self.pose_history.append((stamp, self.pose))
             if self.home is None:
                 self.home = np.array([p.x, p.y, p.z])
 
@@ -236,6 +243,25 @@ class RobotAgent(Agent):
             if self.backend.now() >= end or self.backend.is_shutdown():
                 raise TaskError('no pose received on ual/pose')
             self.backend.sleep(0.1)
+
+    def pose_at(self, stamp: float) -> np.ndarray:
+        """x, y, z, yaw at time `stamp` (s), interpolated in the pose history; the oldest / newest pose
+        outside it. Why: a detection from an image taken 0.3 s ago, placed with the current pose of a
+        UAV pushed by the wind, lands beside the object (a decoy 0.7 m from the hole became "the hole")."""
+        with self.state_lock:
+            hist = list(self.pose_history)
+        if not hist:
+            return self.position()
+        if stamp <= hist[0][0]:
+            return hist[0][1].copy()
+        if stamp >= hist[-1][0]:
+            return hist[-1][1].copy()
+        i = next(k for k in range(len(hist) - 1, 0, -1) if hist[k - 1][0] <= stamp)
+        (t0, p0), (t1, p1) = hist[i - 1], hist[i]
+        w = (stamp - t0) / (t1 - t0) if t1 > t0 else 1.0
+        out = p0 + w * (p1 - p0)
+        out[3] = p0[3] + w * wrap_angle(p1[3] - p0[3])
+        return out
 
     def fire(self, fire_id: int) -> Any:
         """The estimated object with this id (an mbzirc_comm_objs/Object); ValueError when unknown."""

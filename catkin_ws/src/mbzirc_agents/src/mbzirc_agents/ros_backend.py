@@ -69,6 +69,9 @@ class RosBackend:
         """rospy.is_shutdown."""
         return rospy.is_shutdown()
 
+    def loginfo(self, msg: str) -> None:
+        rospy.loginfo(msg)
+
     def loginfo_throttle(self, period: float, msg: str) -> None:
         rospy.loginfo_throttle(period, msg)
 

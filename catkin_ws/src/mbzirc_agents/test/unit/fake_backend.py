@@ -52,6 +52,7 @@ class FakeBackend:
         self.servers = {}
         self.pubs = {}
         self.errors = []
+        self.infos = []
         self.shutdown = False
         self.handlers = {}          # service name -> callable(request) for service_proxy
 
@@ -89,6 +90,9 @@ class FakeBackend:
 
     def is_shutdown(self):
         return self.shutdown
+
+    def loginfo(self, m):
+        self.infos.append(m)
 
     def loginfo_throttle(self, p, m):
         pass

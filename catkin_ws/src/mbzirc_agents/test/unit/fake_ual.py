@@ -32,6 +32,8 @@ class FakeUal:
         self.speedup = speedup
         self.regions = regions or RegionManager()
         self.waypoints = []
+        self.follow_velocity = False     # opt-in: fly the agent's ual/set_velocity commands (0.3 s each)
+        self._vel_seen = 0
         self.lock = threading.Lock()
         h = backend.handlers
         h['ual/take_off'] = self.take_off
@@ -73,10 +75,26 @@ class FakeUal:
             self.waypoints.append(self.goal)
         return GoToWaypointResponse()
 
+    def _velocity(self):
+        """The latest ual/set_velocity command if it is new or under 0.3 s old (world m/s), else None."""
+        msgs = self.be.pubs.get('ual/set_velocity') or []
+        if len(msgs) != self._vel_seen:
+            self._vel_seen = len(msgs)
+            if msgs:
+                t = msgs[-1].twist.linear
+                self.vel, self.vel_time = np.array([t.x, t.y, t.z]), time.monotonic()
+        if self.vel is not None and time.monotonic() - self.vel_time < 0.3:
+            return self.vel
+        return None
+
     def _loop(self):
         dt = 0.02
         while not self.stop:
+            v = self._velocity() if self.follow_velocity else None
             with self.lock:
+                if v is not None and self.state in (State.FLYING_AUTO, State.FLYING_MANUAL):
+                    self.goal = None
+                    self.pos = self.pos + v * self.speedup * dt
                 if self.goal is not None:
                     g, gy = self.goal
                     d = g - self.pos

@@ -55,11 +55,6 @@ def test_thermal_pixel_to_ground():
     assert off[1] < 0
 
 
-def test_pick_hole_middle_of_three():
-    assert list(c.pick_hole([(2, 0.6, 0), (2, -0.6, 0), (2, 0.02, 0)])) == [2, 0.02, 0]
-    assert c.pick_hole([]) is None
-
-
 def test_yaw_rate_short_way():
     assert c.yaw_rate_to(3.0, -3.0) > 0
     assert c.yaw_rate_to(0.0, 0.1) == pytest.approx(0.1)

@@ -1,4 +1,5 @@
-"""extinguish_facade_fire safety against the fake UAL: laser clamp, hole-jump abort, stop when cold.
+"""extinguish_facade_fire safety against the fake UAL: laser clamp, hole-jump abort, stop when cold,
+which circle is the hole (decoys, the opening seen by the depth camera, detections from older images).
 
 Why: the centring loop once drifted into the wall (aiming on the hole, then on a metres-off estimate)
 and always emptied the tank. Here the UAV sits at the standoff of a holder on the west face of the
@@ -10,6 +11,7 @@ import time
 
 import numpy as np
 import pytest
+import rospy
 from mbzirc_comm_objs.msg import (ExtinguishFacadeFireGoal, Object, ObjectDetection, ObjectDetectionList,
                                   ObjectList, TakeOffGoal)
 from mbzirc_comm_objs.srv import CheckFireResponse
@@ -18,9 +20,28 @@ from sensor_msgs.msg import LaserScan
 from fake_backend import FakeBackend
 from fake_ual import start_uav
 from mbzirc_agents import constants as C
-from mbzirc_agents.control import HoleCentering, front_distance
+from mbzirc_agents.control import HoleCentering, body_to_world, front_distance, world_to_body
+from mbzirc_agents.tasks.sensing import CAM_OFFSET_X, SensedObjects
 
 HOLDER = (11.4, 8.5, 6.0)          # west face; standoff at x = 11.4 - 1.5, facing +x (yaw 0)
+DECOY_L, DECOY_R = (11.4, 9.2, 6.0), (11.4, 7.8, 6.0)   # 0.7 m left / right of the hole, seen from the UAV
+
+
+def optical_detection(world, opening, pose, stamp=None):
+    """A circle_detector TYPE_HOLE detection of an arena point seen from pose (x, y, z, yaw): optical
+    frame, point_of_interest `opening` m deeper along the ray (None: no depth there)."""
+    b = world_to_body(np.subtract(world, pose[:3]), pose[3])
+    o = np.array([-b[1], -b[2], b[0] - CAM_OFFSET_X])
+    d = ObjectDetection(type=C.TYPE_HOLE)
+    d.header.frame_id = 'mbzirc2020_2/camera_color_optical_frame'
+    if stamp is not None:
+        d.header.stamp = rospy.Time.from_sec(stamp)
+    d.pose.pose.position.x, d.pose.pose.position.y, d.pose.pose.position.z = o
+    if opening is not None:
+        q = o * (o[2] + opening) / o[2]
+        d.point_of_interest.x, d.point_of_interest.y, d.point_of_interest.z = q
+    d.scale.x = 0.15
+    return d
 
 
 class Scene:
@@ -30,6 +51,7 @@ class Scene:
         self.be, self.ual = be, ual
         self.hole = np.array(HOLDER)
         self.wall = None                          # laser distance ahead (None: no scan)
+        self.circles = None                       # [(arena point, opening m or None)] seen by the camera
         self.hot = lambda: True
         self.stop = False
         be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
@@ -38,7 +60,11 @@ class Scene:
     def _loop(self):
         while not self.stop:
             subs = self.be.subs
-            if 'sensed_objects' in subs:
+            if 'sensed_objects' in subs and self.circles is not None:
+                pose = np.r_[self.ual.pos, self.ual.yaw]
+                subs['sensed_objects'](ObjectDetectionList(
+                    objects=[optical_detection(w, o, pose) for w, o in self.circles]))
+            elif 'sensed_objects' in subs:
                 d = ObjectDetection(type=C.TYPE_HOLE)
                 d.header.frame_id = 'arena'
                 d.pose.pose.position.x, d.pose.pose.position.y, d.pose.pose.position.z = self.hole
@@ -52,6 +78,14 @@ class Scene:
             time.sleep(0.1)
 
 
+def set_fire(be, position):
+    """The estimator's track of the facade fire (id 5)."""
+    o = Object(id=5, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_FACADE, status=C.STATUS_ACTIVE)
+    o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = position
+    o.pose.pose.orientation.w = 1.0
+    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+
+
 @pytest.fixture
 def scene():
     be = FakeBackend()
@@ -60,12 +94,9 @@ def scene():
     s = be.servers['take_off_action']
     s.send(TakeOffGoal(height=3.0))
     assert s.wait(10) == 'succeeded'
-    o = Object(id=5, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_FACADE, status=C.STATUS_ACTIVE)
-    o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = HOLDER
-    o.pose.pose.orientation.w = 1.0
     be.handlers['/set_object_status'] = lambda r: sc.statuses.append(r.object_status) or type('R', (), {})()
     sc.statuses = []
-    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+    set_fire(be, HOLDER)
     yield agent, ual, be, sc
     sc.stop = True
     be.shutdown = True
@@ -128,6 +159,116 @@ def test_hole_jump_aborts(scene):
     assert s.wait(10) == 'aborted'
     assert 'jumped' in s.result.message
     assert not ual.pump
+
+
+def lateral_track(ual, server, until):
+    """|y - hole y| of the UAV, sampled every 20 ms while the task runs (at most `until` s)."""
+    out = []
+    deadline = time.monotonic() + until
+    while not server.done.is_set() and time.monotonic() < deadline:
+        out.append(abs(ual.pos[1] - HOLDER[1]))
+        time.sleep(0.02)
+    return out
+
+
+def test_a_decoy_beside_a_lost_hole_does_not_take_the_lock(scene):
+    """Locked and shooting; then the hole drops out of the detections and only the decoy 0.7 m aside is
+    seen (wind, a missed frame): the UAV keeps aiming at where the hole is (seen: the lock moved to the
+    decoy, the jet followed it and the fire was left at 74 %)."""
+    agent, ual, be, sc = scene
+    ual.follow_velocity = True
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
+    s = be.servers['extinguish_facade_fire_action']
+    s.send(ExtinguishFacadeFireGoal(fire_id=5))
+    deadline = time.monotonic() + 15
+    while not ual.pump and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert ual.pump, 'never started shooting'
+    sc.circles = [(DECOY_R, 0.0)]
+    track = lateral_track(ual, s, 10)
+    assert s.wait(10) == 'succeeded', s.text
+    assert max(track) < 0.25, f'the UAV went {max(track):.2f} m aside, towards the decoy'
+    assert ual.water <= 0.1 and sc.statuses == []          # hot all along: the whole tank, still active
+
+
+def test_a_decoy_taken_for_the_hole_is_dropped_for_the_opening(scene):
+    """The estimate sits on the left decoy and only two circles are seen (a holder at a building corner),
+    with no depth through them at first: the UAV locks on the decoy, where the thermal camera answers
+    "no fire". Once the depth camera sees through the other circle it re-locks on it, and only its
+    answers decide: hot, then cold once water flowed there."""
+    agent, ual, be, sc = scene
+    ual.follow_velocity = True
+    ual.speedup = 1.0
+    set_fire(be, DECOY_L)
+    sc.circles = [(HOLDER, None), (DECOY_L, None)]
+    on_hole = lambda: abs(ual.pos[1] - HOLDER[1]) < 0.2
+    water_on_hole = []
+    sc.hot = lambda: not on_hole() or len(water_on_hole) < 10       # cold on the decoy (the fire is aside)
+
+    def openings_after_the_first_lock():
+        while not be.infos and not sc.stop:
+            time.sleep(0.02)
+        time.sleep(1.0)                                             # cold answers on the decoy meanwhile
+        sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0)]
+        while not sc.stop:
+            if on_hole() and ual.pump:
+                water_on_hole.append(1)
+            time.sleep(0.1)
+    threading.Thread(target=openings_after_the_first_lock, daemon=True).start()
+    s, status = extinguish(be, timeout=40)
+    assert status == 'succeeded', s.text
+    assert s.result.extinguished, s.result.message
+    assert on_hole(), f'ended {abs(ual.pos[1] - HOLDER[1]):.2f} m beside the hole'
+    assert any('not seen through' in m for m in be.infos) and any('sees through' in m for m in be.infos), be.infos
+    assert ual.water > 0.3 and sc.statuses == [C.STATUS_EXTINGUISHED]
+
+
+def test_a_fire_never_seen_hot_is_out_only_on_a_hole_seen_through(scene):
+    """A nearly quenched heater reads cold from the start: on an opening it is out after 2 x COLD_CHECKS
+    cold answers (water kept flowing meanwhile); on a circle not known to be the hole it is not."""
+    agent, ual, be, sc = scene
+    ual.speedup = 1.0
+    sc.hot = lambda: False
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
+    t0 = time.monotonic()
+    s, status = extinguish(be, timeout=40)
+    assert status == 'succeeded' and s.result.extinguished, s.result.message
+    assert ual.water > 0.2 and sc.statuses == [C.STATUS_EXTINGUISHED]
+    assert any('never hot' in m for m in be.infos)
+    assert time.monotonic() - t0 > 2 * C.COLD_CHECKS * 0.5
+    sc.statuses.clear()
+    ual.water = 2.0
+    sc.circles = None                                  # the scripted hole in the arena frame: no depth
+    time.sleep(0.3)                                    # (let it replace the last detection with depth)
+    s, status = extinguish(be, timeout=40)
+    assert status == 'succeeded' and not s.result.extinguished, s.result.message
+    assert ual.water <= 0.1 and sc.statuses == []
+
+
+def test_holes_are_placed_with_the_pose_of_their_image(scene):
+    """A detection from an image 0.4 s old, taken while the UAV flew sideways at 2 m/s, lands on the
+    hole, not 0.8 m beside it (pose_at interpolates the pose history)."""
+    agent, ual, be, sc = scene
+    task = type('T', (), {'name': 'probe', 'agent': agent,
+                          'iface': type('I', (), {'add_subscriber': lambda *a: None})()})()
+    sensed = SensedObjects(task)
+    ual.goal = (np.array([9.9, 8.5, 6.0]), 0.0)
+    while np.linalg.norm(ual.pos - [9.9, 8.5, 6.0]) > 0.01:
+        time.sleep(0.02)
+    then = time.monotonic()
+    pose_then = np.r_[ual.pos, ual.yaw]
+    ual.speedup = 1.25                                           # 2 m/s along -y
+    ual.goal = (np.array([9.9, 4.0, 6.0]), 0.0)
+    time.sleep(0.4)
+    sensed.on_msg(ObjectDetectionList(objects=[optical_detection(HOLDER, 0.3, pose_then, stamp=then)]))
+    (hole,) = sensed.recent_holes(1.0)
+    now = agent.position()
+    seen = now[:3] + body_to_world(hole.body, now[3])
+    assert np.linalg.norm(now[:3] - pose_then[:3]) > 0.5                 # it did move meanwhile
+    assert np.linalg.norm(seen - HOLDER) < 0.1, seen
+    assert hole.opening == pytest.approx(0.3, abs=1e-6) and hole.radius == pytest.approx(0.15)
+    p = agent.pose_at(then)
+    assert np.linalg.norm(p[:3] - pose_then[:3]) < 0.06
 
 
 def test_laser_clamps_forward_motion_whatever_the_hole_says(scene):

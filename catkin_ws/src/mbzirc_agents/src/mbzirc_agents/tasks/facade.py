@@ -10,11 +10,12 @@ import math
 from typing import Optional
 
 import numpy as np
+from circle_detector import hole_choice
 from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import LaserScan
 
 from .. import constants as C
-from ..control import HoleCentering, body_to_world, front_distance, pick_hole, world_to_body, yaw_rate_to
+from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall, nearest_face
 from .cold_check import ColdConfirmation
@@ -36,18 +37,12 @@ def gen_facade_fire(goal, agent) -> dict:
 
 
 def choose_hole(holes: list) -> Optional[np.ndarray]:
-    """The middle circle of a holder (hole between two decoys) among (body point, radius) circles.
-
-    Uses the circle_detector library's choice when it is installed (it checks spacing and radii), else
-    the middle one by lateral position.
-    """
-    try:
-        from circle_detector.hole_choice import choose_middle_hole
-    except ImportError:
-        return pick_hole([h for h, _ in holes]) if len(holes) >= 3 else None
-    optical = [(-h[1], -h[2], h[0] - CAM_OFFSET_X, r) for h, r in holes]   # x right, y down, z forward
-    i = choose_middle_hole(optical)
-    return None if i is None else holes[i][0]
+    """Body point of the hole to shoot among Holes: the circle the depth camera sees through, or the
+    middle of three circles (hole between two decoys); None when no choice is safe (circle_detector's
+    choice, which also checks spacing and radii)."""
+    optical = [(-h.body[1], -h.body[2], h.body[0] - CAM_OFFSET_X, h.radius) for h in holes]  # x right, y down
+    i = hole_choice.choose_hole(optical, [h.opening for h in holes])
+    return None if i is None else holes[i].body
 
 
 def keep_off_walls(p, v: np.ndarray, min_dist: float) -> np.ndarray:
@@ -172,6 +167,8 @@ class ExtinguishFacadeFire(AgentTask):
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
         self.locked_hole: Optional[np.ndarray] = None
+        self.locked_open = False                # the depth camera saw through the locked circle
+        self.lock_count = 0                     # how many locks this run (a new lock resets "cold")
         self._front = (math.inf, -1e9)          # (laser distance ahead m, receive time)
         self.iface.add_subscriber(self.name, 'scan', LaserScan, self._on_scan)
         # switches the (lazy) circle detector on while this task runs: holes arrive in sensed_objects
@@ -196,7 +193,8 @@ class ExtinguishFacadeFire(AgentTask):
         if a.water_empty():
             raise TaskError('tank empty: go home and refill first')
         fire = np.array(fire_position(a, ud.fire_id))
-        self.locked_hole = None
+        self.locked_hole, self.locked_open, self.lock_count = None, False, 0
+        self.sensed.clear()
         ctl = HoleCentering(shoot_distance=float(a.p['shoot_distance']))
         pos, wall_yaw = facade_standoff(fire, C.BUILDINGS, ctl.shoot_distance)
         self.feedback('APPROACHING', f'to {ctl.shoot_distance:.1f} m in front of fire {ud.fire_id}')
@@ -215,47 +213,84 @@ class ExtinguishFacadeFire(AgentTask):
                                     f'fire {ud.fire_id} still hot, tank empty'))
         return C.SUCCESS
 
-    def _target(self, fire, ctl) -> tuple:
-        """Body-frame aim point and where it comes from: hole > own fire detection > estimate."""
+    def _target(self, fire) -> tuple:
+        """Body-frame aim point and where it comes from: hole > own fire detection > estimate.
+
+        Which circle is "the hole": at the first sight, the one circle_detector's choice names (seen
+        through by the depth camera, or the middle of three) if it lies within 1 m of the estimate, else
+        the circle nearest the estimate within 0.5 m. It is then locked (arena position) and followed:
+        only a circle within C.HOLE_SAME_MAX of the lock is the same hole (the decoys sit 0.7 m aside);
+        a circle the depth camera sees through replaces a lock that was not seen through (a decoy taken
+        for the hole); nothing near the lock -> aim on the lock ("last hole"); every circle further than
+        C.HOLE_JUMP_MAX -> abort rather than chase it near the wall.
+        """
         p = self.agent.position()
         holes = self.sensed.recent_holes(1.0)    # sim s: the circle detector runs at a few Hz on a busy CPU
         if self.locked_hole is not None:
-            # track the locked hole: never fall back to the (maybe metres off) estimate again
             if holes:
-                worlds = [p[:3] + body_to_world(h, p[3]) for h, _ in holes]
+                worlds = [p[:3] + body_to_world(h.body, p[3]) for h in holes]
                 jumps = [float(np.linalg.norm(w - self.locked_hole)) for w in worlds]
-                i = int(np.argmin(jumps))
-                if jumps[i] > C.HOLE_JUMP_MAX:
-                    raise TaskError(f'hole estimate jumped {jumps[i]:.1f} m (> {C.HOLE_JUMP_MAX} m): '
+                if min(jumps) > C.HOLE_JUMP_MAX:
+                    raise TaskError(f'hole estimate jumped {min(jumps):.1f} m (> {C.HOLE_JUMP_MAX} m): '
                                     'not chasing it near the wall')
-                self.locked_hole = worlds[i]
-                return np.asarray(holes[i][0], dtype=float), 'hole'
+                openings = [i for i, h in enumerate(holes)
+                            if hole_choice.is_opening(h.opening) and jumps[i] <= C.HOLE_JUMP_MAX]
+                if not self.locked_open and len(openings) == 1 and jumps[openings[0]] > C.HOLE_SAME_MAX:
+                    i = openings[0]
+                    self._lock(worlds[i], True, f'the camera sees through a circle {jumps[i]:.2f} m from '
+                                                f'the locked one (a decoy): locked on it')
+                    return np.asarray(holes[i].body, dtype=float), 'hole'
+                i = int(np.argmin(jumps))
+                if jumps[i] <= C.HOLE_SAME_MAX:
+                    self.locked_hole = worlds[i]
+                    self.locked_open = self.locked_open or hole_choice.is_opening(holes[i].opening)
+                    return np.asarray(holes[i].body, dtype=float), 'hole'
             return world_to_body(self.locked_hole - p[:3], p[3]), 'last hole'
         if holes:
             expected = world_to_body(fire - p[:3], p[3])
-            middle = choose_hole(holes)
-            if middle is None or np.linalg.norm(middle[1:] - expected[1:]) >= 1.0:
-                middle = min((h for h, _ in holes), key=lambda h: np.linalg.norm(h[1:] - expected[1:]))
-                if np.linalg.norm(middle[1:] - expected[1:]) >= 0.5:
-                    middle = None
-            if middle is not None:
-                middle = np.asarray(middle, dtype=float)
-                self.locked_hole = p[:3] + body_to_world(middle, p[3])
-                return middle, 'hole'
+            chosen = choose_hole(holes)
+            best = None
+            if chosen is not None and np.linalg.norm(chosen[1:] - expected[1:]) < 1.0:
+                best = next(h for h in holes if h.body is chosen)
+            else:
+                near = min(holes, key=lambda h: np.linalg.norm(h.body[1:] - expected[1:]))
+                if np.linalg.norm(near.body[1:] - expected[1:]) < 0.5:
+                    best = near
+            if best is not None:
+                body = np.asarray(best.body, dtype=float)
+                self._lock(p[:3] + body_to_world(body, p[3]), hole_choice.is_opening(best.opening),
+                           f'locked on a hole {np.linalg.norm(body[1:] - expected[1:]):.2f} m from the '
+                           f'estimate ({"seen through" if hole_choice.is_opening(best.opening) else "not seen through"}'
+                           f'{", middle of three" if best.body is chosen else ""})')
+                return body, 'hole'
         det = self.sensed.recent_fire(0.5)
         if det is not None and det[2] == C.CAMERA_FORWARD:
             return np.array(det[1]), 'thermal'
         return world_to_body(fire - p[:3], p[3]), 'estimate'
 
+    def _lock(self, world: np.ndarray, seen_through: bool, why: str) -> None:
+        """Lock on a hole; a new lock is a new target: its cold answers start again from zero."""
+        self.locked_hole, self.locked_open = np.asarray(world, dtype=float), seen_through
+        self.lock_count += 1
+        self.agent.backend.loginfo(f'[{self.name}] {why} at ({world[0]:.2f}, {world[1]:.2f}, {world[2]:.2f})')
+
     def _shoot(self, ctl: HoleCentering, fire, wall_yaw: float, fire_id: int) -> bool:
+        """Centre and pump until the thermal camera says the fire is out (True) or the tank is empty.
+
+        When is it out: C.COLD_CHECKS "no fire" answers in a row, asked only while the jet is centred on
+        the locked hole and the pump runs, and counted only after the fire was seen hot while centred on
+        that same lock (cold answers centred on a decoy say nothing about the fire: seen, a fire left at
+        74 %). A fire never seen hot there counts as out only after twice as many cold answers and only
+        on a hole the depth camera sees through (a nearly quenched heater reads cold from the start).
+        """
         a = self.agent
         dt = 1.0 / C.CONTROL_RATE_HZ
         start = a.backend.now()
         centred_once = False
         pumping_since = None
         last_centred = -1e9
-        cold = ColdConfirmation()
-        cold.seen_hot = True                            # it was hot when the search found it
+        cold, cold_lock = ColdConfirmation(), self.lock_count
+        unseen_cold = 0                                 # cold answers on a lock never seen hot
         last_check = -1e9
         while True:
             self.check_preempt()
@@ -264,8 +299,11 @@ class ExtinguishFacadeFire(AgentTask):
                 raise TaskError(f'not done after {a.p["extinguish_timeout"]:.0f} s')
             if not centred_once and now - start > float(a.p['centering_timeout']):
                 raise TaskError(f'could not centre the hole in {a.p["centering_timeout"]:.0f} s')
-            target, source = self._target(fire, ctl)
+            target, source = self._target(fire)
+            if self.lock_count != cold_lock:            # another circle is the hole now: start again
+                cold, cold_lock, unseen_cold = ColdConfirmation(), self.lock_count, 0
             p = a.position()
+            on_hole = source in ('hole', 'last hole')
             if ctl.centred(target):
                 centred_once, last_centred = True, now
                 if pumping_since is None:
@@ -283,13 +321,21 @@ class ExtinguishFacadeFire(AgentTask):
             if a.water_empty():
                 a.stop_pump()
                 a.hold()                                # no velocity loop while we wait for the answers
-                return cold.settle(a.fire_detected, self.sleep)   # did the last water do it?
-            if pumping_since is not None and last_centred == now and now - last_check >= 0.5:
+                return on_hole and cold.settle(a.fire_detected, self.sleep)   # did the last water do it?
+            if (on_hole and pumping_since is not None and last_centred == now
+                    and now - last_check >= 0.5):
                 # water flowing into the hole now: is the fire still hot? Only then: off the hole the
                 # thermal camera may not see the fire (seen: 6 "cold" answers while re-centring after a
                 # hole switch, fire 10 % full), and cold answers while the wind holds the jet beside the
                 # hole leave a nearly quenched fire unfinished (seen: 99.5 %)
                 last_check = now
-                if cold.update(a.fire_detected()):
+                hot = a.fire_detected()
+                if cold.update(hot):
                     return True                         # cold: stop pumping, keep the rest of the tank
+                if not cold.seen_hot and self.locked_open:
+                    unseen_cold = unseen_cold + 1 if hot is False else 0
+                    if unseen_cold >= 2 * cold.checks:
+                        a.backend.loginfo(f'[{self.name}] fire {fire_id}: never hot in {unseen_cold} checks '
+                                          'on a hole the camera sees through: out')
+                        return True
             a.backend.sleep(dt)

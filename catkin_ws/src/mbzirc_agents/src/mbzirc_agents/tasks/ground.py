@@ -97,6 +97,7 @@ class ExtinguishGroundFire(AgentTask):
         if not a.blanket_attached:
             raise TaskError('no blanket attached: go home for a new one first')
         fire = np.array(fire_position(a, ud.fire_id))
+        self.sensed.clear()
         h = float(a.p['ground_search_height'])
         self.feedback('APPROACHING', f'over fire {ud.fire_id}')
         if self.call_task('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)}) != C.SUCCESS:

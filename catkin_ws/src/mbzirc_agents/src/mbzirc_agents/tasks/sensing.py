@@ -7,16 +7,27 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 from mbzirc_comm_objs.msg import ObjectDetectionList
 
 from .. import constants as C
-from ..control import world_to_body
+from ..control import body_to_world, world_to_body
 from ..framework import AgentTask
 
 CAM_OFFSET_X = 0.15      # base_link -> camera_color_optical_frame (docs/interfaces.md)
+
+
+class Hole(NamedTuple):
+    """A circle of the circle detector, in the body frame of the current pose.
+
+    opening: m the circle's middle lies behind its rim (circle_detector's point_of_interest): ~0.3 for
+    the real hole, ~0 for a painted decoy, NaN unknown.
+    """
+    body: np.ndarray
+    radius: float
+    opening: float
 
 
 class SensedObjects:
@@ -25,7 +36,7 @@ class SensedObjects:
     def __init__(self, task: AgentTask) -> None:
         self.task = task
         self.lock = threading.Lock()
-        self.holes: list = []            # (body-frame point, radius m)
+        self.holes: list = []            # (arena point at the image's time, radius m, opening m)
         self.holes_time = -1e9
         self.fire: Optional[tuple] = None  # (arena position, body relative position, camera direction)
         self.fire_time = -1e9
@@ -44,9 +55,10 @@ class SensedObjects:
                 a.backend.logerr_throttle(5.0, 'sensed_objects: NaN position, ignored')
                 continue
             if d.type == C.TYPE_HOLE:
-                b = self._to_body(d.header.frame_id, (p.x, p.y, p.z))
-                if b is not None:
-                    holes.append((b, float(d.scale.x)))
+                # placed in the arena with the pose when the image was taken: the UAV moves meanwhile
+                w = self._to_world(d.header.frame_id, (p.x, p.y, p.z), stamp)
+                if w is not None:
+                    holes.append((w, float(d.scale.x), self._opening(d)))
             elif d.type == C.TYPE_FIRE:
                 r = d.relative_position
                 with self.lock:
@@ -56,21 +68,42 @@ class SensedObjects:
             with self.lock:
                 self.holes, self.holes_time = holes, stamp
 
-    def _to_body(self, frame: str, p) -> Optional[np.ndarray]:
+    @staticmethod
+    def _opening(d) -> float:
+        """Depth behind the rim seen through the circle (optical z), NaN when the detector had none."""
+        q = d.point_of_interest
+        if q.z == 0.0 or not math.isfinite(q.z):
+            return math.nan
+        return float(q.z - d.pose.pose.position.z)
+
+    def _to_world(self, frame: str, p, stamp: float) -> Optional[np.ndarray]:
         frame = frame.lstrip('/')
-        if frame.endswith('optical_frame'):               # x right, y down, z forward
-            return np.array([p[2] + CAM_OFFSET_X, -p[0], -p[1]])
-        if frame.endswith('base_link'):
-            return np.array(p)
         if frame in ('', C.GLOBAL_FRAME):
-            pose = self.task.agent.position()
-            return world_to_body(np.array(p) - pose[:3], pose[3])
-        self.task.agent.backend.logerr_throttle(5.0, f'sensed_objects: hole in unknown frame {frame!r}')
-        return None
+            return np.array(p, dtype=float)
+        if frame.endswith('optical_frame'):               # x right, y down, z forward
+            body = np.array([p[2] + CAM_OFFSET_X, -p[0], -p[1]])
+        elif frame.endswith('base_link'):
+            body = np.array(p, dtype=float)
+        else:
+            self.task.agent.backend.logerr_throttle(5.0, f'sensed_objects: hole in unknown frame {frame!r}')
+            return None
+        pose = self.task.agent.pose_at(stamp)
+        return pose[:3] + body_to_world(body, pose[3])
+
+    def clear(self) -> None:
+        """Forget every detection: a new run of the task must not steer with the last run's."""
+        with self.lock:
+            self.holes, self.holes_time = [], -1e9
+            self.fire, self.fire_time = None, -1e9
 
     def recent_holes(self, max_age: float) -> list:
+        """The circles of the last detection (if at most max_age s old) as Holes seen from the pose now."""
         with self.lock:
-            return list(self.holes) if self.task.agent.backend.now() - self.holes_time <= max_age else []
+            if self.task.agent.backend.now() - self.holes_time > max_age:
+                return []
+            holes = list(self.holes)
+        pose = self.task.agent.position()
+        return [Hole(world_to_body(w - pose[:3], pose[3]), r, o) for w, r, o in holes]
 
     def recent_fire(self, max_age: float) -> Optional[tuple]:
         with self.lock:
