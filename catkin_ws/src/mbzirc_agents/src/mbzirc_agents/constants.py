@@ -91,5 +91,7 @@ HOLE_SAME_MAX = 0.35            # m: a circle this close to the locked hole is t
 COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out; the
 #                                 water keeps flowing meanwhile: a nearly quenched heater reads cold while its
 #                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)
+FIRE_LITRES = 1.0               # L into a facade / indoor fire's container to put it out (c3_world.md): a run
+#                                 whose tank ran dry calls a cold fire out only after delivering this much
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)

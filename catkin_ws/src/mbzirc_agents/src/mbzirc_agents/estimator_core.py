@@ -29,7 +29,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from . import constants as C
-from .geometry import in_footprint, nearest_face
+from .geometry import in_footprint, nearest_face, standing_at
 
 STICKY = (C.STATUS_INACTIVE, C.STATUS_EXTINGUISHED)
 
@@ -64,6 +64,7 @@ class Track:
 
 def classify_fire(position: Sequence[float], buildings: Sequence[Sequence[float]]) -> int:
     """SUBTYPE_* of a fire at position: inside a footprint -> INDOOR, low and away from walls -> GROUND."""
+    buildings = standing_at(position, buildings, 0.0)   # nothing is indoors above a roof
     if in_footprint(position, buildings, margin=-0.5):
         return C.SUBTYPE_INDOOR
     _, d = nearest_face(position, buildings)

@@ -66,6 +66,7 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'entry_depth': 2.5,
     'indoor_fire_distance': 1.5,
     'top_up_time': 3.0,
+    'fire_litres': C.FIRE_LITRES,      # L a facade / indoor fire's container takes (see tasks/cold_check.py)
     'building_clearance': 1.5,
     'home': [],                        # [x, y, z]; empty: the first pose received
 }

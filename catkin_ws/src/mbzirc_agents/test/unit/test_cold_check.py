@@ -1,6 +1,8 @@
 """ColdConfirmation: when a water task may stop pumping."""
+import pytest
+
 from mbzirc_agents import constants as C
-from mbzirc_agents.tasks.cold_check import ColdConfirmation
+from mbzirc_agents.tasks.cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
 
 
 def test_cold_needs_hot_first_then_consecutive_colds():
@@ -42,3 +44,31 @@ def test_settle_gives_up_after_checks_answers():
     naps = []
     assert not c.settle(lambda: True, naps.append)
     assert len(naps) == 6
+
+
+def test_water_meter_counts_drops_while_pumping_only():
+    m = WaterMeter()
+    m.update(2.0, False)
+    m.update(1.5, True)
+    m.update(1.2, False)           # pump off (e.g. off target): not delivered at the fire
+    m.update(float('nan'), True)   # no reading: ignored
+    m.update(1.0, True)
+    m.update(1.4, True)            # a refill reading: never negative
+    assert m.litres == pytest.approx(0.7)
+    assert m.covers(0.7) and not m.covers(1.0)
+
+
+def test_dry_tank_verdict():
+    """Cold once the last water settled is "out" only after a whole fire's water from this run."""
+    def run(litres, answers):
+        c = ColdConfirmation(checks=2)
+        c.update(True)
+        m = WaterMeter()
+        m.update(litres, True)
+        m.update(0.0, True)
+        it = iter(answers)
+        return dry_tank_verdict(c, m, 1.0, lambda: next(it, False), lambda s: None)
+    assert run(1.5, [False, False]) == (True, 'cold after 1.50 L')
+    out, why = run(0.9, [False, False])
+    assert not out and 'top-up' in why and '0.90 L' in why
+    assert run(1.5, [True] * 10) == (False, 'still hot, tank empty')

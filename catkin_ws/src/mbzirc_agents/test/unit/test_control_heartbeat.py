@@ -82,3 +82,16 @@ def test_keep_off_walls():
     # 0.9 m away, moving along the wall: unchanged; moving toward it: stopped
     assert keep_off_walls((15.0, 20.4, 6.0), np.array([0.3, 0.0, 0.0]), 1.0)[1] == 0.0
     assert keep_off_walls((15.0, 20.4, 6.0), np.array([0.0, -0.4, 0.0]), 1.0)[1] == pytest.approx(0.0)
+
+
+def test_keep_off_walls_ignores_a_roof_below():
+    """In front of facade D's fire at (24.2, 18.8, 12.5) the UAV is above the 4.5 m extension, 0.7 m from
+    its north edge: that edge is no wall at 12.5 m (it pushed the UAV off the hole for good in seed 9)."""
+    from mbzirc_agents.tasks.facade import keep_off_walls
+    v = np.array([0.0, -0.4, 0.0])
+    assert list(keep_off_walls((25.7, 18.8, 12.5), v, 1.0)) == list(v)
+    assert list(keep_off_walls((25.7, 20.3, 12.5), v, 1.0)) == list(v)
+    # the tower wall 0.8 m ahead still stops a forward (-x) move there
+    assert keep_off_walls((25.0, 18.8, 12.5), np.array([-0.3, 0.0, 0.0]), 1.0)[0] >= 0.0
+    # at 3 m the extension's edge is a wall again
+    assert keep_off_walls((25.7, 20.2, 3.0), v, 1.0)[1] > 0

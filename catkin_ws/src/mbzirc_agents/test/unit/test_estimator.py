@@ -83,6 +83,9 @@ def test_classify_fire():
     assert classify_fire((12.4, 19.5, 6.5), C.BUILDINGS) == C.SUBTYPE_FACADE
     assert classify_fire((23.7, 19.5, 0.75), C.BUILDINGS) == C.SUBTYPE_FACADE
     assert classify_fire((16, 12, 1.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
+    # 0.8 m out from facade D, above the one-storey extension: a facade fire, not one inside the extension
+    assert classify_fire((25.0, 18.8, 12.5), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((30.0, 12.0, 2.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
 
 
 def test_noise_tails_do_not_start_duplicate_tracks():

@@ -147,6 +147,20 @@ def test_hot_fire_empties_the_tank_and_stays_active(scene):
     assert sc.statuses == []
 
 
+@pytest.mark.parametrize('water,out', [(0.6, False), (2.0, True)])
+def test_cold_only_after_the_tank_ran_dry(scene, water, out):
+    """The fire reads cold only once the tank is dry: out after a whole fire's water from this run, else
+    left active (it may be at 98 %, cooled under the detector's threshold) for a refilled UAV."""
+    agent, ual, be, sc = scene
+    ual.water = water
+    sc.hot = lambda: ual.water > 0.1
+    s, status = extinguish(be)
+    assert status == 'succeeded' and s.result.extinguished is out, s.result.message
+    assert sc.statuses == ([C.STATUS_EXTINGUISHED] if out else [])
+    if not out:
+        assert 'top-up' in s.result.message
+
+
 def test_hole_jump_aborts(scene):
     agent, ual, be, sc = scene
     s = be.servers['extinguish_facade_fire_action']

@@ -50,6 +50,20 @@ def test_facade_standoff_faces_the_wall(holder, normal):
     assert math.sin(yaw) == pytest.approx(-normal[1], abs=1e-9)
 
 
+def test_standing_at_keeps_the_buildings_that_rise_to_that_height():
+    assert g.standing_at((25.7, 18.8, 12.5), C.BUILDINGS) == [C.TOWER]
+    assert g.standing_at((25.7, 18.8, 4.8), C.BUILDINGS) == [C.TOWER, C.EXTENSION]   # 0.5 m clearance
+    assert g.standing_at((25.7, 18.8, 4.8), C.BUILDINGS, 0.0) == [C.TOWER]
+    assert g.standing_at((25.7, 18.8), C.BUILDINGS) == list(C.BUILDINGS)             # 2D: every footprint
+    assert g.standing_at((0, 0, 30.0), C.BUILDINGS) == []
+
+
+def test_facade_standoff_of_a_fire_above_the_extension():
+    """Facade D fire 0.7 m from the north-east corner, above the extension: out along +x, facing west."""
+    pos, yaw = g.facade_standoff((24.2, 18.8, 12.5), C.BUILDINGS, 1.5)
+    assert pos == pytest.approx((25.7, 18.8, 12.5)) and math.cos(yaw) == pytest.approx(-1.0)
+
+
 def test_facing_pose():
     pos, yaw = g.facing_pose((0, 0, 1), (5, 0, 1), 1.5)
     assert pos == pytest.approx((1.5, 0, 1)) and abs(g.wrap_angle(yaw - math.pi)) < 1e-9

@@ -83,3 +83,18 @@ def test_a_doubtful_track_that_reads_cold_gets_no_water(scenes, updates, std):
     s = sc.extinguish()
     assert s.status == 'aborted' and 'not in sight' in s.result.message
     assert sc.statuses == [] and sc.ual.water == 2.0
+
+
+@pytest.mark.parametrize('water,out', [(0.6, False), (2.0, True)])
+def test_cold_only_after_the_tank_ran_dry(scenes, water, out):
+    """Hot until the last drop, cold after it: a fire being filled cools in the thermal image, so with only
+    0.6 L delivered it may be just short of full and stays active; a whole fire's water puts it out."""
+    sc = scenes(hot_until=0.0)
+    sc.ual.water = water
+    sc.hot = lambda: sc.ual.water > 0.1
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished is out, s.result.message
+    assert sc.statuses == ([C.STATUS_EXTINGUISHED] if out else [])
+    assert sc.ual.water <= 0.1
+    if not out:
+        assert 'top-up' in s.result.message

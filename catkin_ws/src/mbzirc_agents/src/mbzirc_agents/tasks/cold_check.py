@@ -8,6 +8,7 @@ while pumping (a fire never in sight is not a fire put out).
 """
 from __future__ import annotations
 
+import math
 from typing import Callable, Optional
 
 from .. import constants as C
@@ -44,3 +45,42 @@ class ColdConfirmation:
                 return True
             sleep(period)
         return self.out
+
+
+class WaterMeter:
+    """Litres one robot pumped at a fire during one task run: the drops of its tank level while pumping.
+
+    Why: a fire being filled cools down in the thermal image and reads cold for its last few per cent
+    (flames under the detector's 50 degC). When the tank runs dry before the cold answers came while water
+    still flowed, "cold" after the last drop cannot tell a fire out from one at 98 % (seen: an indoor fire
+    left at 98.7 %, marked out). Only a run that delivered a whole fire's water (`~fire_litres`) may call
+    such a fire out; otherwise it stays active for a refilled robot to top up.
+    """
+
+    def __init__(self) -> None:
+        self.litres = 0.0
+        self._last: Optional[float] = None
+
+    def update(self, level: float, pumping: bool) -> None:
+        """One tank reading (litres; NaN unknown) and whether the pump ran since the last one."""
+        if not math.isfinite(level):
+            return
+        if pumping and self._last is not None and level < self._last:
+            self.litres += self._last - level
+        self._last = level
+
+    def covers(self, fire_litres: float) -> bool:
+        """True when this run alone delivered what a whole fire needs."""
+        return self.litres >= fire_litres
+
+
+def dry_tank_verdict(cold: ColdConfirmation, meter: WaterMeter, fire_litres: float,
+                     answer: Callable[[], Optional[bool]], sleep: Callable[[float], None]) -> tuple:
+    """(out, why) for a fire whose robot's tank ran dry before the cold answers: the fire is out only when it
+    reads cold once the last water settled and this run delivered a whole fire's water (see WaterMeter)."""
+    if not cold.settle(answer, sleep):
+        return False, 'still hot, tank empty'
+    if meter.covers(fire_litres):
+        return True, f'cold after {meter.litres:.2f} L'
+    return False, (f'reads cold after the last water, but the tank ran dry after {meter.litres:.2f} L '
+                   f'(< {fire_litres:.2f} L a fire takes): it may be just short of full, left for a top-up')

@@ -17,8 +17,8 @@ from sensor_msgs.msg import LaserScan
 from .. import constants as C
 from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
 from ..framework import AgentTask, TaskError
-from ..geometry import facade_standoff, faces_wall, nearest_face
-from .cold_check import ColdConfirmation
+from ..geometry import facade_standoff, faces_wall, nearest_face, standing_at
+from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects
 
@@ -47,9 +47,10 @@ def choose_hole(holes: list) -> Optional[np.ndarray]:
 
 def keep_off_walls(p, v: np.ndarray, min_dist: float) -> np.ndarray:
     """v without its component toward the nearest wall when closer than min_dist (and a push away when
-    closer than 0.8 x min_dist): whatever the detections say, the UAV never flies into the facade."""
-    normal, d = nearest_face(p[:3], C.BUILDINGS)
-    if normal is None or d >= min_dist or p[2] > max(b[4] for b in C.BUILDINGS):
+    closer than 0.8 x min_dist): whatever the detections say, the UAV never flies into the facade.
+    Only walls that rise to the UAV's height count (not the extension's below a facade D fire)."""
+    normal, d = nearest_face(p[:3], standing_at(p[:3], C.BUILDINGS))
+    if normal is None or d >= min_dist:
         return v
     n = np.array([normal[0], normal[1], 0.0])
     v = np.array(v, dtype=float)
@@ -194,6 +195,7 @@ class ExtinguishFacadeFire(AgentTask):
             raise TaskError('tank empty: go home and refill first')
         fire = np.array(fire_position(a, ud.fire_id))
         self.locked_hole, self.locked_open, self.lock_count = None, False, 0
+        self.dry_note = 'still hot, tank empty'
         self.sensed.clear()
         ctl = HoleCentering(shoot_distance=float(a.p['shoot_distance']))
         pos, wall_yaw = facade_standoff(fire, C.BUILDINGS, ctl.shoot_distance)
@@ -210,7 +212,7 @@ class ExtinguishFacadeFire(AgentTask):
         water = a.water_level if math.isfinite(a.water_level) else 0.0
         self.result.update(extinguished=bool(extinguished), water_left=max(0.0, water),
                            message=(f'fire {ud.fire_id} extinguished' if extinguished else
-                                    f'fire {ud.fire_id} still hot, tank empty'))
+                                    f'fire {ud.fire_id} {self.dry_note}'))
         return C.SUCCESS
 
     def _target(self, fire) -> tuple:
@@ -290,6 +292,7 @@ class ExtinguishFacadeFire(AgentTask):
         pumping_since = None
         last_centred = -1e9
         cold, cold_lock = ColdConfirmation(), self.lock_count
+        meter = WaterMeter()
         unseen_cold = 0                                 # cold answers on a lock never seen hot
         last_check = -1e9
         while True:
@@ -318,10 +321,16 @@ class ExtinguishFacadeFire(AgentTask):
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
+            meter.update(a.water_level, pumping_since is not None)
             if a.water_empty():
                 a.stop_pump()
                 a.hold()                                # no velocity loop while we wait for the answers
-                return on_hole and cold.settle(a.fire_detected, self.sleep)   # did the last water do it?
+                if not on_hole:
+                    return False
+                out, self.dry_note = dry_tank_verdict(cold, meter, float(a.p['fire_litres']), a.fire_detected,
+                                                      self.sleep)
+                a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {self.dry_note}')
+                return out
             if (on_hole and pumping_since is not None and last_centred == now
                     and now - last_check >= 0.5):
                 # water flowing into the hole now: is the fire still hot? Only then: off the hole the

@@ -14,7 +14,7 @@ from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOf
 
 from .. import constants as C
 from ..framework import AgentTask, TaskError
-from ..geometry import column_box, in_footprint, plan_2d, swept_box
+from ..geometry import column_box, in_footprint, plan_2d, standing_at, swept_box
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
@@ -136,7 +136,10 @@ class GoTo(AgentTask):
         if a.ual_state not in FLYING:
             raise TaskError('not flying: take off first')
         start = a.position()
-        indoors = in_footprint(start, C.BUILDINGS) or in_footprint(target, C.BUILDINGS)
+        # (a footprint counts only up to its roof: in front of a facade D fire, above the extension, the
+        # UAV is outside and its legs are planned around the tower)
+        indoors = (in_footprint(start, standing_at(start, C.BUILDINGS))
+                   or in_footprint(target, standing_at(target, C.BUILDINGS)))
         # indoors (or entering / leaving through a window) the caller's waypoints are the path
         legs = [tuple(target)] if self.args.get('straight') or indoors else self._legs(start[:3], target)
         margin = float(a.p['region_margin'])
@@ -153,8 +156,7 @@ class GoTo(AgentTask):
 
     def _legs(self, start, target) -> list:
         """Straight when nothing tall is in the way, else the corners of a 2D plan at the target height."""
-        lo = min(start[2], target[2]) - 0.5
-        obstacles = [b for b in C.BUILDINGS if b[4] > lo]
+        obstacles = standing_at((0.0, 0.0, min(start[2], target[2])), C.BUILDINGS)
         clearance = float(self.agent.p['building_clearance'])
         for c in (clearance, 0.5 * clearance, 0.3):   # near a wall (shooting distance) a smaller one fits
             path = plan_2d(start[:2], target[:2], obstacles, c)
