@@ -93,5 +93,7 @@ COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s
 #                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)
 FIRE_LITRES = 1.0               # L into a facade / indoor fire's container to put it out (c3_world.md): a run
 #                                 whose tank ran dry calls a cold fire out only after delivering this much
+HOLE_RADIUS = 0.15              # m: a facade fire's hole (the container's mouth)
+JET_SPOT_RADIUS = 0.11          # m: radius of the water spot at the shooting distance (nozzle calibration)
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)

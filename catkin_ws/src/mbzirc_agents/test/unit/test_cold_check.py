@@ -58,6 +58,17 @@ def test_water_meter_counts_drops_while_pumping_only():
     assert m.covers(0.7) and not m.covers(1.0)
 
 
+def test_water_meter_weights_drops_by_the_aim():
+    """Water pumped while the aim is off the hole mostly splashes on the wall: it is credited by its share."""
+    m = WaterMeter()
+    m.update(2.0, True)
+    m.update(1.0, True, 1.0)
+    m.update(0.6, True, 0.5)
+    m.update(0.2, True, 0.0)
+    m.update(0.0, True, 7.0)       # a share is clipped to 0-1
+    assert m.litres == pytest.approx(1.0 + 0.2 + 0.0 + 0.2)
+
+
 def test_dry_tank_verdict():
     """Cold once the last water settled is "out" only after a whole fire's water from this run."""
     def run(litres, answers):
@@ -68,7 +79,7 @@ def test_dry_tank_verdict():
         m.update(0.0, True)
         it = iter(answers)
         return dry_tank_verdict(c, m, 1.0, lambda: next(it, False), lambda s: None)
-    assert run(1.5, [False, False]) == (True, 'cold after 1.50 L')
+    assert run(1.5, [False, False]) == (True, 'cold after 1.50 L in')
     out, why = run(0.9, [False, False])
     assert not out and 'top-up' in why and '0.90 L' in why
     assert run(1.5, [True] * 10) == (False, 'still hot, tank empty')

@@ -161,6 +161,18 @@ def test_cold_only_after_the_tank_ran_dry(scene, water, out):
         assert 'top-up' in s.result.message
 
 
+def test_water_splashing_beside_the_hole_does_not_count(scene):
+    """Centred within tolerance but 0.1 m off the hole the whole time: much of the spot hits the wall, so
+    a full tank is not a whole fire's water in, and a fire that reads cold after it stays active."""
+    agent, ual, be, sc = scene
+    sc.hole = np.array(HOLDER) + np.array([0.0, 0.1, 0.0])     # the fake UAV holds the standoff of HOLDER
+    sc.hot = lambda: ual.water > 0.1
+    s, status = extinguish(be)
+    assert status == 'succeeded' and not s.result.extinguished, s.result.message
+    assert 'top-up' in s.result.message and ual.water <= 0.1
+    assert sc.statuses == []
+
+
 def test_hole_jump_aborts(scene):
     agent, ual, be, sc = scene
     s = be.servers['extinguish_facade_fire_action']

@@ -48,7 +48,8 @@ class ColdConfirmation:
 
 
 class WaterMeter:
-    """Litres one robot pumped at a fire during one task run: the drops of its tank level while pumping.
+    """Litres one robot put into a fire during one task run: the drops of its tank level while pumping,
+    each weighted by the share of the jet believed to enter the hole (see HoleCentering.hit_share).
 
     Why: a fire being filled cools down in the thermal image and reads cold for its last few per cent
     (flames under the detector's 50 degC). When the tank runs dry before the cold answers came while water
@@ -61,12 +62,13 @@ class WaterMeter:
         self.litres = 0.0
         self._last: Optional[float] = None
 
-    def update(self, level: float, pumping: bool) -> None:
-        """One tank reading (litres; NaN unknown) and whether the pump ran since the last one."""
+    def update(self, level: float, pumping: bool, on_target: float = 1.0) -> None:
+        """One tank reading (litres; NaN unknown), whether the pump ran since the last one and which share
+        (0-1) of that water is believed to have gone in (the aim; 1 for a robot without a hole to aim at)."""
         if not math.isfinite(level):
             return
         if pumping and self._last is not None and level < self._last:
-            self.litres += self._last - level
+            self.litres += (self._last - level) * min(1.0, max(0.0, on_target))
         self._last = level
 
     def covers(self, fire_litres: float) -> bool:
@@ -81,6 +83,6 @@ def dry_tank_verdict(cold: ColdConfirmation, meter: WaterMeter, fire_litres: flo
     if not cold.settle(answer, sleep):
         return False, 'still hot, tank empty'
     if meter.covers(fire_litres):
-        return True, f'cold after {meter.litres:.2f} L'
-    return False, (f'reads cold after the last water, but the tank ran dry after {meter.litres:.2f} L '
+        return True, f'cold after {meter.litres:.2f} L in'
+    return False, (f'reads cold after the last water, but only {meter.litres:.2f} L went in before the tank ran dry '
                    f'(< {fire_litres:.2f} L a fire takes): it may be just short of full, left for a top-up')

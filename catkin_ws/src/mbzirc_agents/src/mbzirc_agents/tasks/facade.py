@@ -321,7 +321,8 @@ class ExtinguishFacadeFire(AgentTask):
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
-            meter.update(a.water_level, pumping_since is not None)
+            meter.update(a.water_level, pumping_since is not None,
+                         ctl.hit_share(target, C.HOLE_RADIUS, C.JET_SPOT_RADIUS) if on_hole else 0.0)
             if a.water_empty():
                 a.stop_pump()
                 a.hold()                                # no velocity loop while we wait for the answers
