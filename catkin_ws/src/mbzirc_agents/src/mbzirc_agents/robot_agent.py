@@ -67,6 +67,7 @@ DEFAULT_PARAMS: Dict[str, Any] = {
     'indoor_fire_distance': 1.5,
     'top_up_time': 3.0,
     'fire_litres': C.FIRE_LITRES,      # L a facade / indoor fire's container takes (see tasks/cold_check.py)
+    'indoor_hit_share': C.INDOOR_HIT_SHARE,  # share of the water believed to enter an indoor fire (no hole aim)
     'building_clearance': 1.5,
     'home': [],                        # [x, y, z]; empty: the first pose received
 }

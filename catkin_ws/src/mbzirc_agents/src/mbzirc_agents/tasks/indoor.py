@@ -158,7 +158,7 @@ class ExtinguishIndoorFire(AgentTask):
                     raise TaskError('timeout while pumping')
                 self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
                 self.sleep(0.5)
-                meter.update(a.water_level, True)
+                meter.update(a.water_level, True, float(a.p['indoor_hit_share']))
                 if cold.update(a.fire_detected()):
                     break
         finally:
