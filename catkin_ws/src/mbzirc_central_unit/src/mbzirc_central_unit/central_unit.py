@@ -23,7 +23,7 @@ from std_msgs.msg import Header, String
 from . import constants as C
 from .layout import Layout, load_world
 from .strategy import Command, Strategy, StrategyParams
-from .world_model import AgentView, FireView, WorldView, classify_fire
+from .world_model import AgentView, FireView, WorldView, classify_fire, feed_position
 
 ACTION_TYPES = {
     C.TAKE_OFF: "TakeOff", C.LAND: "Land", C.GO_TO: "GoTo", C.FOLLOW_PATH: "FollowPath", C.HOVER: "Hover",
@@ -149,15 +149,15 @@ class CentralUnit:
 
     # ---- inputs ----------------------------------------------------------------------------------
     def _on_feed(self, msg: cmsg.AgentDataFeed, agent_id: str) -> None:
-        p = msg.pose.pose.position
+        xyz = feed_position(msg)
         now = rospy.get_time()
         with self.lock:
             a = self.agents.get(agent_id) or AgentView(agent_id)
             a.last_seen = now
-            if not _finite(p.x, p.y, p.z):
+            if xyz is not None:
+                a.x, a.y, a.z = xyz
+            elif msg.pose.header.frame_id:
                 rospy.logerr_throttle(5.0, f"central_unit: data_feed of {agent_id} has a non-finite pose: ignored")
-            else:
-                a.x, a.y, a.z = p.x, p.y, p.z
             a.robot_type = msg.robot_type or (C.ROBOT_UGV if agent_id == C.UGV_ID else C.ROBOT_UAV)
             a.payload = msg.payload or a.payload
             a.ual_state = msg.ual_state

@@ -18,6 +18,7 @@ from std_msgs.msg import Bool, String
 from . import constants as C
 from .report import write_report
 from .summary import MissionRecord
+from .world_model import feed_position
 
 try:  # the simulator's types: optional so that the recorder still runs against a real-robot setup
     from ual_sim.msg import FireStateArray, Score
@@ -63,13 +64,14 @@ class MissionRecorder:
 
     # ---- inputs ----------------------------------------------------------------------------------
     def _on_feed(self, msg: AgentDataFeed, robot: str) -> None:
-        p = msg.pose.pose.position
-        if not all(math.isfinite(v) for v in (p.x, p.y, p.z)):
-            rospy.logerr_throttle(10.0, f"mission_recorder: non-finite pose from {robot}")
-            return
+        xyz = feed_position(msg)
+        if xyz is None:
+            if msg.pose.header.frame_id:
+                rospy.logerr_throttle(10.0, f"mission_recorder: non-finite pose from {robot}")
+            return                                  # else: no pose yet, (0, 0, 0) is not a place
         with self.lock:
             self.rec.robot_kinds[robot] = "ugv" if msg.robot_type == C.ROBOT_UGV else (msg.payload or "?")
-            self.rec.add_pose(robot, rospy.get_time(), p.x, p.y, p.z)
+            self.rec.add_pose(robot, rospy.get_time(), *xyz)
 
     def _on_status(self, msg: String) -> None:
         try:

@@ -81,6 +81,19 @@ class FireView:
         return self.status in (C.STATUS_ACTIVE, C.STATUS_DETECTED, C.STATUS_LOST)
 
 
+def feed_position(feed) -> Optional[tuple]:
+    """(x, y, z) of an AgentDataFeed's pose; None while the agent has none yet or it is not finite.
+
+    Why: an agent publishes its feed before the UAL's first pose, with an empty PoseStamped (no frame_id)
+    whose (0, 0, 0) is not a place; the recorder once took a UGV there 0.56 m under a UAV taking off.
+    """
+    if not feed.pose.header.frame_id:
+        return None
+    p = feed.pose.pose.position
+    xyz = (p.x, p.y, p.z)
+    return xyz if all(math.isfinite(v) for v in xyz) else None
+
+
 def classify_fire(sub_type: int, x: float, y: float, z: float) -> str:
     """Kind of a fire: the estimator's sub_type when it knows it, else from where the fire is
     (well inside a building box: indoor; on or near a wall: facade; elsewhere: ground)."""

@@ -72,3 +72,17 @@ def test_report_png_is_written(tmp_path):
         assert f.read(8) == b"\x89PNG\r\n\x1a\n"
     assert os.path.getsize(path) > 10000
     json.dumps(r.summary(1.0))
+
+
+def test_a_feed_without_a_pose_is_no_place():
+    """An agent's feed before its UAL's first pose carries an empty PoseStamped: (0, 0, 0) is not where the
+    robot is (it once made a 0.56 m "closest approach" of the UGV and a UAV taking off)."""
+    from mbzirc_comm_objs.msg import AgentDataFeed
+    from mbzirc_central_unit.world_model import feed_position
+    f = AgentDataFeed()
+    assert feed_position(f) is None
+    f.pose.header.frame_id = "arena"
+    f.pose.pose.position.x, f.pose.pose.position.y, f.pose.pose.position.z = 4.0, -4.0, 0.2
+    assert feed_position(f) == (4.0, -4.0, 0.2)
+    f.pose.pose.position.y = math.nan
+    assert feed_position(f) is None
