@@ -55,7 +55,7 @@ class TestIntrospection(unittest.TestCase):
         cls.sm, cls.sub = sm, sub
         cls.structures, cls.statuses = {}, []
         cls.lock = threading.Lock()
-        cls.server = smach_ros.IntrospectionServer("intro", sm, "/ROOT")
+        cls.server = smach_ros.IntrospectionServer("~intro", sm, "/ROOT")  # '~': private to the node
         cls.server.start()
         ns = rospy.get_name() + "/intro/smach/"
         rospy.Subscriber(ns + "container_structure", SmachContainerStructure, cls.on_structure)

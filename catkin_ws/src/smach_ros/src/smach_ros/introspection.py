@@ -1,6 +1,8 @@
 """IntrospectionServer / IntrospectionClient: publish a smach tree's structure and live status.
 
-Topics (``server_name`` not starting with '/' is private to the node, as upstream):
+Topics. ``server_name`` is a ROS name resolved as given, as upstream: a relative name lands in the node's
+namespace (``'intro'`` in node ``/ns/node`` -> ``/ns/intro/smach/...``), ``'~intro'`` is private to the
+node (``/ns/node/intro/smach/...``), ``'/intro'`` is global.
 
 * ``<server_name>/smach/container_structure`` (SmachContainerStructure): one per container, at start and
   every 2 s;
@@ -11,12 +13,17 @@ Topics (``server_name`` not starting with '/' is private to the node, as upstrea
   initial state and userdata. ``local_data`` there may be a JSON object or base64 pickle; the pickle is
   read by a restricted unpickler that only accepts plain builtin data, unless the node's
   ``~smach_allow_unpickle`` param (or the ``allow_unpickle`` argument) is True, the upstream behaviour.
+  The whole topic can be turned off: ``~smach_allow_init`` param / ``allow_init`` argument (default True,
+  as upstream).
+
+Userdata keys can be left out of ``local_data`` (``exclude_keys`` argument, ``~smach_exclude_keys``
+param); values that cannot be pickled, or that are too big, are summarised as text (upstream #18, #77).
 """
 from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Optional
+from typing import Any, Iterable, Optional
 
 import rospy
 from std_msgs.msg import Header
@@ -26,7 +33,7 @@ import smach
 from smach_ros.userdata_codec import DecodeError, contains_opaque, decode_local_data, encode_local_data
 
 __all__ = ["IntrospectionServer", "IntrospectionClient", "ContainerProxy", "STATUS_TOPIC", "INIT_TOPIC",
-           "STRUCTURE_TOPIC"]
+           "STRUCTURE_TOPIC", "child_path"]
 
 STATUS_TOPIC = "/smach/container_status"
 INIT_TOPIC = "/smach/container_init"
@@ -38,13 +45,14 @@ class ContainerProxy:
     """Publishes the structure and status of one container and applies init commands to it."""
 
     def __init__(self, server_name: str, container: smach.Container, path: str, structure_pub: rospy.Publisher,
-                 status_pub: rospy.Publisher, allow_unpickle: bool = False) -> None:
+                 status_pub: rospy.Publisher, allow_unpickle: bool = False, exclude_keys: Iterable[str] = ()) -> None:
         self._server_name = server_name
         self._container = container
         self._path = path
         self._structure_pub = structure_pub
         self._status_pub = status_pub
         self._allow_unpickle = allow_unpickle
+        self._exclude_keys = tuple(exclude_keys)
         self._lock = threading.Lock()
         self._enabled = True
         container.register_start_cb(self._start_cb)
@@ -75,7 +83,7 @@ class ContainerProxy:
             header=Header(stamp=rospy.Time.now()), path=self._path,
             initial_states=[str(s) for s in self._container.get_initial_states()],
             active_states=[str(s) for s in self._container.get_active_states()],
-            local_data=encode_local_data(data), info=info)
+            local_data=encode_local_data(data, self._exclude_keys), info=info)
 
     def publish_structure(self) -> None:
         if self._enabled:
@@ -85,6 +93,8 @@ class ContainerProxy:
                 pass
 
     def publish_status(self, info: str = "") -> None:
+        """Publish this container's status. Never raises: it runs inside the machine's callbacks, and
+        introspection must not stop a machine (upstream #77 did, on a userdata it could not pickle)."""
         if not self._enabled:
             return
         with self._lock:
@@ -92,6 +102,9 @@ class ContainerProxy:
                 self._status_pub.publish(self.status_msg(info))
             except rospy.ROSException:
                 pass
+            except Exception as ex:  # noqa: BLE001 - a user container's getter, a message field
+                rospy.logerr_throttle(5.0, "IntrospectionServer %s: status of %s not published: %r"
+                                      % (self._server_name, self._path, ex))
 
     def _start_cb(self, ud: Any, initial_states: Any, *args: Any) -> None:
         self.publish_status("START")
@@ -137,21 +150,27 @@ class IntrospectionServer:
     """Publishes the structure and status of a smach tree (every nested container) for viewers.
 
     Args:
-        server_name: topic namespace; relative names become private ('~' + name), as upstream.
+        server_name: topic namespace, a ROS name resolved as given (relative: in the node's namespace, as
+            upstream; '~name': private to the node).
         state: the root container.
-        path: the root's path, e.g. '/SM_ROOT'; children get '<path>/<label>'.
+        path: the root's path, e.g. '/SM_ROOT' ('/' alone gives children '/<label>'); children get
+            '<path>/<label>'.
         allow_unpickle: trust pickles in container_init (default: the ``~smach_allow_unpickle`` param,
             False).
+        allow_init: listen to container_init at all (default: the ``~smach_allow_init`` param, True).
+        exclude_keys: userdata keys never sent in status messages (default: the ``~smach_exclude_keys``
+            param, none).
     """
 
     def __init__(self, server_name: str, state: smach.State, path: str,
-                 allow_unpickle: Optional[bool] = None) -> None:
-        if not server_name.startswith("/"):
-            server_name = "~" + server_name
-        self._server_name = server_name
+                 allow_unpickle: Optional[bool] = None, allow_init: Optional[bool] = None,
+                 exclude_keys: Optional[Iterable[str]] = None) -> None:
+        self._server_name = server_name  # rospy resolves it (relative, '~' or global) when advertising
         self._state = state
         self._path = path
         self._allow_unpickle = allow_unpickle
+        self._allow_init = allow_init
+        self._exclude_keys = exclude_keys
         self._proxies: list[ContainerProxy] = []
         self._keep_running = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -163,7 +182,11 @@ class IntrospectionServer:
         """Advertise the topics and start the 2 s heartbeat."""
         if self._allow_unpickle is None:
             self._allow_unpickle = bool(rospy.get_param("~smach_allow_unpickle", False))
-        if self._allow_unpickle:
+        if self._allow_init is None:
+            self._allow_init = bool(rospy.get_param("~smach_allow_init", True))
+        if self._exclude_keys is None:
+            self._exclude_keys = [str(k) for k in rospy.get_param("~smach_exclude_keys", [])]
+        if self._allow_unpickle and self._allow_init:
             rospy.logwarn("IntrospectionServer %s trusts pickles from the network (smach_allow_unpickle)."
                           % self._server_name)
         self._structure_pub = rospy.Publisher(self._server_name + STRUCTURE_TOPIC, SmachContainerStructure,
@@ -171,8 +194,9 @@ class IntrospectionServer:
         self._status_pub = rospy.Publisher(self._server_name + STATUS_TOPIC, SmachContainerStatus, queue_size=100)
         self._proxies = []
         self.construct(self._server_name, self._state, self._path)
-        self._init_sub = rospy.Subscriber(self._server_name + INIT_TOPIC, SmachContainerInitialStatusCmd,
-                                          self._init_cb, queue_size=10)
+        if self._allow_init:
+            self._init_sub = rospy.Subscriber(self._server_name + INIT_TOPIC, SmachContainerInitialStatusCmd,
+                                              self._init_cb, queue_size=10)
         self._keep_running.set()
         self._thread = threading.Thread(name=self._server_name + ":heartbeat", target=self._heartbeat, daemon=True)
         self._thread.start()
@@ -182,11 +206,11 @@ class IntrospectionServer:
         if not isinstance(state, smach.Container):
             return
         proxy = ContainerProxy(server_name, state, path, self._structure_pub, self._status_pub,
-                               bool(self._allow_unpickle))
+                               bool(self._allow_unpickle), self._exclude_keys or ())
         self._proxies.append(proxy)
         for label, child in state.get_children().items():
             if isinstance(child, smach.Container):
-                self.construct(server_name, child, path + "/" + label)
+                self.construct(server_name, child, child_path(path, label))
 
     def _init_cb(self, msg: SmachContainerInitialStatusCmd) -> None:
         for proxy in self._proxies:
@@ -210,11 +234,12 @@ class IntrospectionServer:
         self._keep_running.clear()
         for proxy in self._proxies:
             proxy.stop()
-        if self._thread is not None:
+        if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(1.0)
         for handle in (self._init_sub, self._structure_pub, self._status_pub):
             if handle is not None:
                 handle.unregister()
+        self._init_sub = self._structure_pub = self._status_pub = None
 
     def clear(self) -> None:
         self.stop()
@@ -248,7 +273,8 @@ class IntrospectionClient:
             got = threading.Event()
 
             def status_cb(status: SmachContainerStatus) -> None:
-                if status.path == path and all(s in status.initial_states for s in initial_states):
+                if status.path == path and all(s in status.initial_states for s in initial_states) \
+                        and _holds(status.local_data, data):
                     got.set()
 
             sub = rospy.Subscriber(server + STATUS_TOPIC, SmachContainerStatus, status_cb)
@@ -263,6 +289,22 @@ class IntrospectionClient:
                 sub.unregister()
         finally:
             pub.unregister()
+
+
+def child_path(path: str, label: str) -> str:
+    """The path of child ``label`` of the container at ``path`` (the root may be '/')."""
+    return path.rstrip("/") + "/" + label
+
+
+def _holds(local_data: str, expected: dict) -> bool:
+    """Whether a status's userdata has every key of ``expected`` with an equal value (read safely)."""
+    if not expected:
+        return True
+    try:
+        data = decode_local_data(local_data)
+    except DecodeError:
+        return False
+    return all(key in data and data[key] == value for key, value in expected.items())
 
 
 def _wait_connections(pub: rospy.Publisher, timeout_s: float) -> None:

@@ -10,6 +10,10 @@ ours, so decoding here never calls a class or function named by the data, unless
   str, bytes, int, float, bool, None, set, frozenset, complex) comes back as such; every other class
   becomes an inert :class:`Opaque` record of its name and state, so nothing outside this module runs.
 
+Decoding is bounded (see the limits below): payload size, nesting depth, number of values (counted with
+a memo of visited objects, so shared references cannot make it exponential), distinct class names per
+payload, and the stand-in classes kept between payloads. Past a limit a :class:`DecodeError` names it.
+
 Pure Python (no ROS import) so that the viewer and the tests can use it directly.
 """
 from __future__ import annotations
@@ -20,16 +24,29 @@ import io
 import json
 import math
 import pickle
-from typing import Any
+import threading
+from collections import OrderedDict
+from typing import Any, Iterable, Optional
 
 __all__ = ["encode_local_data", "decode_local_data", "SafeUnpickler", "Opaque", "to_plain",
-           "contains_opaque", "DecodeError", "MAX_LOCAL_DATA_CHARS"]
+           "contains_opaque", "check_limits", "DecodeError", "MAX_LOCAL_DATA_CHARS", "MAX_DEPTH", "MAX_VALUES",
+           "MAX_CLASSES_PER_PAYLOAD", "MAX_CACHED_CLASSES", "MAX_VALUE_BYTES"]
 
-MAX_LOCAL_DATA_CHARS = 8 * 1024 * 1024  # refuse bigger payloads (memory bomb guard)
+# Limits on what comes from the network. Past any of them decoding fails with a DecodeError that names it.
+MAX_LOCAL_DATA_CHARS = 8 * 1024 * 1024  # text size (memory bomb guard)
+MAX_DEPTH = 50                # nesting of containers (dict/list/tuple/set/Opaque state)
+MAX_VALUES = 200000           # values reached, counting shared references once per path (DAG bombs)
+MAX_CLASSES_PER_PAYLOAD = 64  # distinct non-builtin class names one payload may name
+MAX_CACHED_CLASSES = 512      # Opaque stand-in classes kept between payloads (least recently used dropped)
+MAX_NAME_CHARS = 200          # a module or class name longer than this is refused
+# Limit on what we send: a userdata value whose pickle is bigger is summarised instead (one key must not
+# turn every status message of a container into megabytes).
+MAX_VALUE_BYTES = 256 * 1024
 
 
 class DecodeError(ValueError):
-    """The local_data text is neither a JSON object nor a readable base64 pickle of a dict."""
+    """The local_data text is neither a JSON object nor a readable base64 pickle of a dict, or it exceeds
+    one of the limits above."""
 
 
 class Opaque:
@@ -57,56 +74,103 @@ class Opaque:
         return "<%s %r>" % (self._qualname, self.state if self.state is not None else self.args)
 
 
-_opaque_classes: dict[str, type] = {}
+# One stand-in class per dotted name (pickle's NEWOBJ needs a real class); bounded LRU so that a stream of
+# payloads naming ever new classes cannot grow memory without end.
+_opaque_classes: "OrderedDict[str, type]" = OrderedDict()
+_opaque_lock = threading.Lock()
 
 
 def _opaque_class(module: str, name: str) -> type:
     qual = "%s.%s" % (module, name)
-    cls = _opaque_classes.get(qual)
-    if cls is None:
+    with _opaque_lock:
+        cls = _opaque_classes.get(qual)
+        if cls is not None:
+            _opaque_classes.move_to_end(qual)
+            return cls
         cls = type("Opaque[%s]" % qual, (Opaque,), {"_qualname": qual})
         _opaque_classes[qual] = cls
-    return cls
+        while len(_opaque_classes) > MAX_CACHED_CLASSES:
+            _opaque_classes.popitem(last=False)
+        return cls
 
 
 def _latin1_encode(text: str, encoding: str = "latin1") -> bytes:
     """What protocol-2 pickles of bytes call (``_codecs.encode(text, 'latin1')``), and nothing else."""
-    if encoding not in ("latin1", "latin-1"):
-        raise pickle.UnpicklingError("refused codec %r" % encoding)
+    if not isinstance(text, str) or encoding not in ("latin1", "latin-1"):
+        raise pickle.UnpicklingError("refused codec call")
     return text.encode("latin1")
 
 
-_SAFE_GLOBALS = {
-    ("builtins", "set"): set, ("builtins", "frozenset"): frozenset, ("builtins", "complex"): complex,
-    ("builtins", "bytearray"): bytearray, ("__builtin__", "set"): set, ("__builtin__", "frozenset"): frozenset,
-    ("_codecs", "encode"): _latin1_encode, ("builtins", "bytes"): bytes,
-}
+def _bytes_like(kind: type) -> Any:
+    """``bytes``/``bytearray`` for the unpickler, refusing a size argument (``bytes(10**10)`` is a memory
+    bomb of a few bytes)."""
+    def build(*args: Any) -> Any:
+        if args and not isinstance(args[0], (bytes, bytearray, str)):
+            raise pickle.UnpicklingError("refused %s(%s)" % (kind.__name__, type(args[0]).__name__))
+        return kind(*args)
+    return build
+
+
+# Protocol-2 pickles name builtins by their Python 2 module '__builtin__' (find_class sees the raw name).
+_SAFE_GLOBALS = {(module, name): value
+                 for module in ("builtins", "__builtin__")
+                 for name, value in (("set", set), ("frozenset", frozenset), ("complex", complex),
+                                     ("bytearray", _bytes_like(bytearray)), ("bytes", _bytes_like(bytes)))}
+_SAFE_GLOBALS[("_codecs", "encode")] = _latin1_encode
 
 
 class SafeUnpickler(pickle.Unpickler):
-    """An Unpickler that only ever builds plain data and :class:`Opaque` records."""
+    """An Unpickler that only ever builds plain data and :class:`Opaque` records, naming at most
+    ``MAX_CLASSES_PER_PAYLOAD`` distinct classes."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._names: set = set()
 
     def find_class(self, module: str, name: str) -> Any:
         safe = _SAFE_GLOBALS.get((module, name))
         if safe is not None:
             return safe
+        if len(module) > MAX_NAME_CHARS or len(name) > MAX_NAME_CHARS:
+            raise pickle.UnpicklingError("class name longer than %d characters" % MAX_NAME_CHARS)
+        self._names.add((module, name))
+        if len(self._names) > MAX_CLASSES_PER_PAYLOAD:
+            raise pickle.UnpicklingError("more than %d distinct classes named" % MAX_CLASSES_PER_PAYLOAD)
         return _opaque_class(module, name)
 
 
-def encode_local_data(data: dict) -> str:
-    """``base64(pickle protocol 2)`` of a userdata dict; values that cannot be pickled become their repr."""
-    data = dict(data)
+def encode_local_data(data: dict, exclude: Iterable[str] = (), max_value_bytes: int = MAX_VALUE_BYTES) -> str:
+    """``base64(pickle protocol 2)`` of a userdata dict. Never raises.
+
+    Keys in ``exclude`` are left out (upstream #18); a value that cannot be pickled (a lock, a Popen, a
+    SWIG object: upstream #18, #77) or whose pickle exceeds ``max_value_bytes`` is replaced by a short text
+    saying so, so one bad key never stops the container's status (nor the machine's transitions).
+    """
+    excluded = set(exclude)
+    data = {k: v for k, v in list(dict(data).items()) if k not in excluded}
     try:
         raw = pickle.dumps(data, 2)
+        if len(raw) <= max_value_bytes:
+            return base64.b64encode(raw).decode("ascii")
     except Exception:  # noqa: BLE001 - anything a user object's reduce may raise
-        safe = {}
-        for key, value in data.items():
-            try:
-                pickle.dumps(value, 2)
-                safe[key] = value
-            except Exception:  # noqa: BLE001
-                safe[key] = "<unpicklable %s: %s>" % (type(value).__name__, _short_repr(value))
+        pass
+    safe = {}
+    for key, value in data.items():
+        safe_key = key if isinstance(key, (str, int, float, bool, type(None))) else _short_repr(key)
+        try:
+            size = len(pickle.dumps(value, 2))
+        except Exception:  # noqa: BLE001
+            safe[safe_key] = "<unpicklable %s: %s>" % (type(value).__name__, _short_repr(value))
+            continue
+        if size > max_value_bytes:
+            safe[safe_key] = "<%s of %d pickled bytes, over the %d-byte cap: not sent>" % (
+                type(value).__name__, size, max_value_bytes)
+        else:
+            safe[safe_key] = value
+    try:
         raw = pickle.dumps(safe, 2)
+    except Exception as ex:  # noqa: BLE001 - a value changed under us between the two dumps
+        raw = pickle.dumps({"__error__": "userdata could not be encoded: %s" % _short_repr(ex)}, 2)
     return base64.b64encode(raw).decode("ascii")
 
 
@@ -128,7 +192,7 @@ def decode_local_data(text: str, allow_unsafe: bool = False) -> dict:
     if stripped.startswith("{"):
         try:
             data = json.loads(stripped)
-        except ValueError as ex:
+        except (ValueError, RecursionError) as ex:
             raise DecodeError("local_data is not valid JSON: %s" % ex) from None
     else:
         try:
@@ -144,48 +208,115 @@ def decode_local_data(text: str, allow_unsafe: bool = False) -> dict:
             raise DecodeError("local_data is not a readable pickle: %s" % ex) from None
     if not isinstance(data, dict):
         raise DecodeError("local_data must hold a dict, got %s" % type(data).__name__)
+    check_limits(data)
     return data
 
 
-def contains_opaque(obj: Any, _depth: int = 0) -> bool:
-    """True if decoded data holds an :class:`Opaque` (a class the safe decoder refused) anywhere."""
-    if _depth > 50:
-        return True
-    if isinstance(obj, Opaque):
-        return True
+def _children(obj: Any) -> Optional[list]:
+    """The values directly inside a decoded container (None for a leaf)."""
     if isinstance(obj, dict):
-        return any(contains_opaque(k, _depth + 1) or contains_opaque(v, _depth + 1) for k, v in obj.items())
+        return [x for kv in obj.items() for x in kv]
     if isinstance(obj, (list, tuple, set, frozenset)):
-        return any(contains_opaque(v, _depth + 1) for v in obj)
+        return list(obj)
+    if isinstance(obj, Opaque):
+        return [obj.state, list(obj.args)]
+    return None
+
+
+def check_limits(data: Any, max_depth: int = MAX_DEPTH, max_values: int = MAX_VALUES) -> None:
+    """Raise DecodeError if decoded data nests deeper than ``max_depth`` or reaches more than
+    ``max_values`` values. Linear in the payload: each container is expanded once (a memo of visited
+    objects), so shared references (a 444-byte pickle can describe a DAG of 2**45 paths) cost nothing."""
+    seen: set = set()
+    stack = [(data, 0)]
+    count = 0
+    while stack:
+        obj, depth = stack.pop()
+        count += 1
+        if count > max_values:
+            raise DecodeError("local_data holds more than %d values" % max_values)
+        inner = _children(obj)
+        if inner is None or id(obj) in seen:
+            continue
+        if depth >= max_depth:
+            raise DecodeError("local_data nests deeper than %d levels" % max_depth)
+        seen.add(id(obj))
+        stack.extend((child, depth + 1) for child in inner)
+
+
+def contains_opaque(obj: Any) -> bool:
+    """True if decoded data holds an :class:`Opaque` (a class the safe decoder refused) anywhere.
+    Iterative with a memo of visited containers: linear, whatever the sharing or cycles."""
+    seen: set = set()
+    stack = [obj]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, Opaque):
+            return True
+        inner = _children(item)
+        if inner is None or id(item) in seen:
+            continue
+        seen.add(id(item))
+        stack.extend(inner)
     return False
 
 
-def to_plain(obj: Any, _depth: int = 0) -> Any:
-    """Turn decoded userdata into JSON-serialisable values for display (never raises)."""
-    if _depth > 30:
-        return "..."
+class _Budget:
+    """How many more values :func:`to_plain` may emit (shared references are expanded in JSON)."""
+
+    def __init__(self, values: int) -> None:
+        self.left = values
+
+    def take(self) -> bool:
+        self.left -= 1
+        return self.left >= 0
+
+
+def to_plain(obj: Any, max_depth: int = 30, max_values: int = 20000) -> Any:
+    """Turn decoded userdata into JSON-serialisable values for display (never raises).
+
+    Bounded: past ``max_depth`` levels a value shows as ``"..."``, a cycle as ``"<cycle>"``, and once
+    ``max_values`` values were emitted the rest show as ``"<truncated>"`` (shared references make the
+    JSON form of a small payload exponentially large)."""
+    return _plain(obj, 0, max_depth, _Budget(max_values), set())
+
+
+def _plain(obj: Any, depth: int, max_depth: int, budget: _Budget, path: set) -> Any:
+    if not budget.take():
+        return "<truncated>"
     if obj is None or isinstance(obj, (bool, int, str)):
         return obj
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else str(obj)
     if isinstance(obj, (bytes, bytearray)):
         return "<%d bytes>" % len(obj) if len(obj) > 64 else repr(bytes(obj))
-    if isinstance(obj, dict):
-        return {str(k): to_plain(v, _depth + 1) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple, set, frozenset)):
-        return [to_plain(v, _depth + 1) for v in obj]
     if isinstance(obj, complex):
         return str(obj)
-    if isinstance(obj, Opaque):
+    if _children(obj) is None:
+        return _short_repr(obj)
+    if depth > max_depth:
+        return "..."
+    if id(obj) in path:
+        return "<cycle>"
+    path.add(id(obj))
+    try:
+        def sub(value: Any) -> Any:
+            return _plain(value, depth + 1, max_depth, budget, path)
+        if isinstance(obj, dict):
+            return {str(k): sub(v) for k, v in obj.items()}
+        if isinstance(obj, (list, tuple, set, frozenset)):
+            return [sub(v) for v in obj]
         out: dict[str, Any] = {"__class__": obj._qualname}
         state = obj.state
-        if isinstance(state, tuple) and len(state) == 2 and (state[0] is None or isinstance(state[0], dict)):
+        if isinstance(state, tuple) and len(state) == 2 and (state[0] is None or isinstance(state[0], dict)) \
+                and (state[1] is None or isinstance(state[1], dict)):
             merged = dict(state[0] or {})
             merged.update(state[1] or {})
             state = merged
         if state is not None:
-            out["state"] = to_plain(state, _depth + 1)
+            out["state"] = sub(state)
         elif obj.args:
-            out["args"] = to_plain(list(obj.args), _depth + 1)
+            out["args"] = sub(list(obj.args))
         return out
-    return _short_repr(obj)
+    finally:
+        path.discard(id(obj))
