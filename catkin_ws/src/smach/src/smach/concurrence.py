@@ -125,6 +125,9 @@ class Concurrence(Container):
     def execute(self, parent_ud: Optional[Any] = None) -> str:
         if parent_ud is None:
             parent_ud = UserData()
+        if not self._states:
+            # (upstream 2.5.2 raises too; before that it waited forever for children that never end)
+            raise InvalidStateError("Concurrence has no child states to execute.")
         self.check_consistency()
         with self._done_cond:
             self._is_running = True

@@ -137,12 +137,13 @@ class StateMachine(Container):
         return self._states
 
     def set_initial_state(self, initial_states: Sequence[str], userdata: Optional[Any] = None) -> None:
+        """Start at ``initial_states[0]`` and add ``userdata`` to the machine's userdata.
+
+        The label may name a state that is added later (as upstream): ``execute`` checks it.
+        """
         if len(initial_states) > 1:
             raise InvalidStateError("Cannot set more than one initial state for a SMACH state machine.")
         if initial_states:
-            if initial_states[0] not in self._states:
-                raise InvalidStateError("Initial state '%s' is not a state of this machine (%s)."
-                                        % (initial_states[0], list(self._states)))
             self._initial_state_label = initial_states[0]
         if userdata is not None:
             self.userdata.update(userdata)

@@ -173,6 +173,14 @@ def test_userdata_in_and_out_with_remapping():
     assert parent.a_out == 2
 
 
+def test_empty_concurrence_raises_instead_of_hanging():
+    # upstream's concurrence test: a Concurrence with no child raises InvalidStateError when executed
+    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
+    with pytest.raises(smach.InvalidStateError, match="no child"):
+        cc.execute()
+    assert not cc.is_running()
+
+
 def test_policy_validation_and_consistency():
     with pytest.raises(smach.InvalidStateError):
         smach.Concurrence(outcomes=["a"], default_outcome="b")

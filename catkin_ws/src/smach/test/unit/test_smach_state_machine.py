@@ -42,8 +42,26 @@ def test_first_added_is_initial_and_set_initial_state():
     assert sm.execute() == "y"
     with pytest.raises(smach.InvalidStateError):
         sm.set_initial_state(["A", "B"])
-    with pytest.raises(smach.InvalidStateError):
-        sm.set_initial_state(["NOPE"])
+    sm.set_initial_state(["NOPE"])  # accepted (the state may be added later); refused when it runs
+    with pytest.raises(smach.InvalidTransitionError, match="NOPE"):
+        sm.execute()
+    assert not sm.is_running()
+
+
+def test_initial_state_and_userdata_set_before_the_state_is_added():
+    # as upstream's monitor test: set_initial_state(['MON'], userdata=ud) on an empty machine
+    ud = smach.UserData()
+    ud.b = "B"
+    sm = smach.StateMachine(outcomes=["x", "y"])
+    sm.set_initial_state(["SECOND"], userdata=ud)
+    assert sm.userdata.b == "B"
+    copier = smach.CBState(lambda u: setattr(u, "a", u.b) or "y", outcomes=["y"], input_keys=["b"],
+                           output_keys=["a"])
+    with sm:
+        smach.StateMachine.add("FIRST", Const("x", outcomes=["x"]))
+        smach.StateMachine.add("SECOND", copier)
+    assert sm.get_initial_states() == ["SECOND"]
+    assert sm.execute() == "y" and sm.userdata.a == "B"
 
 
 def test_outcome_without_transition_falls_through_to_container_outcome():
