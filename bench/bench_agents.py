@@ -23,12 +23,13 @@ import numpy as np
 
 from _common import use_sources, write_result
 
-use_sources('mbzirc_agents/src', 'smach/src', 'mbzirc_agents/test/unit')
+use_sources('mbzirc_agents/src', 'object_estimation/src', 'shared_regions_manager/src', 'smach/src',
+            'mbzirc_agents/test/unit')
 
 from mbzirc_agents import constants as C  # noqa: E402
-from mbzirc_agents.estimator_core import Detection, ObjectEstimator  # noqa: E402
+from object_estimation.core import Detection, ObjectEstimator  # noqa: E402
 from mbzirc_agents.geometry import in_footprint, plan_2d, path_length  # noqa: E402
-from mbzirc_agents.region_manager_core import RegionManager  # noqa: E402
+from shared_regions_manager.core import RegionManager  # noqa: E402
 
 QUICK = '--quick' in sys.argv
 FIRES = [(12.4, 19.5, 6.5), (24.2, 12.7, 10.5), (11.4, 18.5, 2.75), (-9.0, 20.0, 0.0), (1.0, 14.0, 0.0),

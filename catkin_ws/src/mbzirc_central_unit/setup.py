@@ -1,4 +1,4 @@
-"""Installs the pure-Python library of mbzirc_central_unit (strategy core, recorder logic)."""
+"""Installs the pure-Python library of mbzirc_central_unit (the strategy core)."""
 from setuptools import setup
 from catkin_pkg.python_setup import generate_distutils_setup
 

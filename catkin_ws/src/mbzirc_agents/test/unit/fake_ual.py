@@ -15,7 +15,7 @@ from std_srvs.srv import TriggerResponse
 from uav_abstraction_layer.msg import State
 from uav_abstraction_layer.srv import GoToWaypointResponse, LandResponse, TakeOffResponse
 
-from mbzirc_agents.region_manager_core import RegionManager
+from shared_regions_manager.core import RegionManager
 
 
 class FakeUal:

@@ -1,0 +1,174 @@
+"""mission_recorder: the referee. Reads ground truth (/sim/fires, /sim/score) and the robots' data_feeds,
+prints the progress line, ends the trial (20 sim minutes or every fire out), writes summary.json and
+report.png. It never publishes anything the strategy reads.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import threading
+import time
+from typing import Any
+
+import rospy
+from mbzirc_comm_objs.msg import AgentDataFeed
+from std_msgs.msg import Bool, String
+
+from mbzirc_central_unit import constants as C
+from .report import write_report
+from .summary import MissionRecord
+from mbzirc_central_unit.world_model import feed_position
+
+try:  # the simulator's types: optional so that the recorder still runs against a real-robot setup
+    from ual_sim.msg import FireStateArray, Score
+except ImportError:  # pragma: no cover - depends on the workspace
+    FireStateArray = Score = None
+
+
+class MissionRecorder:
+    """Keeps a `MissionRecord` up to date and closes the trial; see the package README for params."""
+
+    def __init__(self) -> None:
+        self.out_dir = os.path.expanduser(str(rospy.get_param("~output_dir", "/tmp/mbzirc_mission")))
+        self.summary_path = str(rospy.get_param("~summary_path", ""))
+        self.shutdown_on_end = bool(rospy.get_param("~shutdown_on_end", True))
+        self.progress_period = float(rospy.get_param("~progress_period", 10.0))
+        self.expected_fires = int(rospy.get_param("~expected_fires", 8))
+        self.rec = MissionRecord(seed=int(rospy.get_param("~seed", 0)),
+                                 duration=float(rospy.get_param("~duration", C.MISSION_DURATION)))
+        self.extra = {"uavs": int(rospy.get_param("~uavs", 3)), "ugv": bool(rospy.get_param("~ugv", True)),
+                      "rtf_requested": float(rospy.get_param("~rtf", 0.0))}
+        self.lock = threading.Lock()
+        self.status: dict[str, Any] = {}
+        self.wall_start = time.time()
+        self.sim_start_wall: float | None = None
+        self.sim_at_start = 0.0          # sim time of the first /sim/score the recorder received
+        self.done = False
+        self.last_progress = -math.inf
+        os.makedirs(self.out_dir, exist_ok=True)
+        self.done_pub = rospy.Publisher("~done", Bool, queue_size=1, latch=True)
+        self.done_pub.publish(Bool(False))
+        ids = [C.UGV_ID] if self.extra["ugv"] else []
+        ids += [str(i) for i in range(1, self.extra["uavs"] + 1)]
+        self.subs = [rospy.Subscriber(f"/{C.robot_ns(i)}/data_feed", AgentDataFeed, self._on_feed,
+                                      callback_args=i, queue_size=1) for i in ids]
+        self.subs.append(rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=1))
+        if FireStateArray is not None:
+            self.subs.append(rospy.Subscriber("/sim/fires", FireStateArray, self._on_fires, queue_size=1))
+            self.subs.append(rospy.Subscriber("/sim/score", Score, self._on_score, queue_size=1))
+        else:
+            rospy.logerr("mission_recorder: ual_sim messages not found: no ground truth, no score")
+        self.timer = rospy.Timer(rospy.Duration(1.0), self._check)
+        rospy.on_shutdown(self._on_shutdown)
+
+    # ---- inputs ----------------------------------------------------------------------------------
+    def _on_feed(self, msg: AgentDataFeed, robot: str) -> None:
+        xyz = feed_position(msg)
+        if xyz is None:
+            if msg.pose.header.frame_id:
+                rospy.logerr_throttle(10.0, f"mission_recorder: non-finite pose from {robot}")
+            return                                  # else: no pose yet, (0, 0, 0) is not a place
+        with self.lock:
+            self.rec.robot_kinds[robot] = "ugv" if msg.robot_type == C.ROBOT_UGV else (msg.payload or "?")
+            self.rec.add_pose(robot, rospy.get_time(), *xyz)
+
+    def _on_status(self, msg: String) -> None:
+        try:
+            self.status = json.loads(msg.data)
+        except ValueError:
+            rospy.logerr_throttle(10.0, "mission_recorder: /central_unit/status is not JSON")
+
+    def _on_fires(self, msg: Any) -> None:
+        with self.lock:
+            for f in msg.fires:
+                self.rec.update_fire(f.id, f.kind, f.floor, (f.position.x, f.position.y, f.position.z),
+                                     f.active, f.extinguished, f.progress, f.extinguish_time)
+
+    def _on_score(self, msg: Any) -> None:
+        if self.sim_start_wall is None:  # the wall clock of the trial starts with the simulator's
+            self.sim_start_wall = time.time()
+            self.sim_at_start = float(msg.elapsed)
+        with self.lock:
+            self.rec.set_score(msg.elapsed, msg.score, list(msg.crashed_robots))
+
+    # ---- the referee ----------------------------------------------------------------------------
+    def _rtf(self) -> float:
+        """Sim seconds per wall second since the recorder first heard the simulator.
+
+        Why not elapsed / wall: on a busy machine the recorder may come up after the simulator has run
+        for a while, and the sim time it missed has no wall time to divide by.
+        """
+        if self.sim_start_wall is None:
+            return 0.0
+        wall = time.time() - self.sim_start_wall
+        return (self.rec.elapsed - self.sim_at_start) / wall if wall > 1.0 else 0.0
+
+    def _wall(self) -> float:
+        """Wall time of the whole trial: measured, plus the sim time before the recorder at the same rate."""
+        if self.sim_start_wall is None:
+            return time.time() - self.wall_start
+        wall = time.time() - self.sim_start_wall
+        rtf = self._rtf()
+        return wall + (self.sim_at_start / rtf if rtf > 0 else 0.0)
+
+    def _check(self, _event: Any) -> None:
+        if self.done:
+            return
+        with self.lock:
+            if self.rec.elapsed <= 0.0:
+                self.rec.elapsed = rospy.get_time()
+            reason = self.rec.finished(self.expected_fires)
+        if self.rec.elapsed - self.last_progress >= self.progress_period or reason:
+            self.last_progress = self.rec.elapsed
+            print(self.progress_line(), flush=True)
+        if reason:
+            self.finish(reason)
+
+    def progress_line(self) -> str:
+        """One terminal line: sim time, fires found and out, score, what each robot does."""
+        r = self.rec
+        found = len(self.status.get("fires", []))
+        out = sum(1 for f in r.fires.values() if f.extinguished)
+        rtf = self._rtf()
+        robots = []
+        for rid, a in sorted(self.status.get("agents", {}).items()):
+            what = a.get("doing") or a.get("task") or "idle"
+            robots.append(f"{rid}:{what}" + ("" if a.get("alive", True) else " (SILENT)"))
+        crash = f" CRASHES {','.join(r.crashes)}" if r.crashes else ""
+        return (f"[mission] t={r.elapsed:6.0f}s ({rtf:3.1f}x) found {found} out {out}/{len(r.fires) or '?'} "
+                f"score {r.score:4.2f}{crash} | " + " | ".join(robots))
+
+    def finish(self, reason: str) -> None:
+        """Write summary.json and report.png, say so, and end the launch when asked to."""
+        if self.done:
+            return
+        self.done = True
+        with self.lock:
+            summary = self.rec.summary(self._wall(), reason, self.extra)
+            self.write(summary)
+        print(f"[mission] END ({reason}): score {summary['score']} fires {summary['fires_extinguished']}/"
+              f"{summary['fires_total']} sim {summary['sim_time_s']}s wall {summary['wall_time_s']}s "
+              f"rtf {summary['real_time_factor']} crashes {summary['crashes'] or 'none'} -> {self.out_dir}",
+              flush=True)
+        self.done_pub.publish(Bool(True))
+        if self.shutdown_on_end:
+            rospy.signal_shutdown(f"mission over: {reason}")
+
+    def write(self, summary: dict) -> None:
+        paths = [os.path.join(self.out_dir, "summary.json")] + ([self.summary_path] if self.summary_path else [])
+        for p in paths:
+            d = os.path.dirname(os.path.abspath(p))
+            os.makedirs(d, exist_ok=True)
+            with open(p, "w", encoding="utf-8") as f:
+                json.dump(summary, f, indent=2)
+        try:
+            write_report(self.rec, os.path.join(self.out_dir, "report.png"))
+        except Exception as e:  # noqa: BLE001 - the summary matters more than the picture
+            rospy.logerr(f"mission_recorder: report.png failed: {e}")
+
+    def _on_shutdown(self) -> None:
+        if not self.done:
+            self.done = True
+            with self.lock:
+                self.write(self.rec.summary(self._wall(), "interrupted", self.extra))

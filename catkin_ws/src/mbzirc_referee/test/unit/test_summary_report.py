@@ -1,0 +1,88 @@
+"""The referee's record, summary.json completeness and report.png."""
+import json
+import math
+import os
+
+from mbzirc_referee.report import write_report
+from mbzirc_referee.summary import MissionRecord, check_summary
+
+
+def _record():
+    r = MissionRecord(seed=7, duration=100.0)
+    r.robot_kinds.update({"1": "blanket", "2": "water", "0": "ugv"})
+    for t in range(0, 60, 1):
+        r.add_pose("1", float(t), -2 + t * 0.1, 1.65, 3.0)
+        r.add_pose("2", float(t), 0.0, t * 0.3, 5.5)
+        r.add_pose("0", float(t), 4.0 + t * 0.2, -4.0, 0.0)
+    r.update_fire("ground_0", 1, 0, (1.0, 1.65, 0.0), True, False, 0.0, -1)
+    r.update_fire("facade_C_3", 0, 2, (11.4, 14.5, 10.5), True, False, 0.4, -1)
+    r.update_fire("facade_C_4", 0, 2, (11.4, 8.5, 12.5), False, False, 0.0, -1)  # inactive holder
+    return r
+
+
+def test_inactive_holders_are_not_fires():
+    r = _record()
+    assert set(r.fires) == {"ground_0", "facade_C_3"}
+
+
+def test_extinguish_is_credited_to_the_nearest_robot_of_the_right_kind():
+    r = _record()
+    r.set_score(30.0, 0.4, [])
+    r.update_fire("ground_0", 1, 0, (4.0, 1.65, 0.0), True, True, 1.0, 31.0)
+    r.update_fire("facade_C_3", 0, 2, (11.4, 14.5, 10.5), True, True, 1.0, 55.0)
+    s = r.summary(20.0, "all_fires_out")
+    by = {f["id"]: f["extinguished_by"] for f in s["fires"]}
+    assert by == {"ground_0": "1", "facade_C_3": "2"}  # the UGV is nearer the ground fire but has no blanket
+    assert s["fires_extinguished"] == 2 and s["fires_total"] == 2
+    assert s["all_out_time_s"] == 55.0
+    assert check_summary(s) == []
+
+
+def test_end_conditions():
+    r = _record()
+    assert r.finished(2) is None
+    r.set_score(100.0, 0.0, ["mbzirc2020_2"])
+    assert r.finished(2) == "time"
+    r2 = _record()
+    r2.update_fire("ground_0", 1, 0, (1.0, 1.65, 0.0), True, True, 1.0, 10.0)
+    assert r2.finished(2) is None
+    r2.update_fire("facade_C_3", 0, 2, (11.4, 14.5, 10.5), True, True, 1.0, 12.0)
+    assert r2.finished(2) == "all_fires_out"
+    assert r2.finished(8) is None  # fewer fires known than expected: not over yet
+
+
+def test_summary_fields_and_rtf_and_min_separation():
+    r = _record()
+    r.set_score(60.0, 0.5, ["mbzirc2020_3"])
+    s = r.summary(15.0, "time", {"uavs": 3})
+    assert s["real_time_factor"] == 4.0 and s["sim_time_s"] == 60.0 and s["crashes"] == ["mbzirc2020_3"]
+    assert s["uavs"] == 3
+    assert math.isclose(s["min_separation_m"], min(
+        math.dist((-2 + t * 0.1, 1.65, 3.0), (0.0, t * 0.3, 5.5)) for t in range(60)), rel_tol=0.2)
+    assert check_summary({"seed": 1}) != []
+    assert "fires[0].kind=lava" in check_summary({**s, "fires": [{**s["fires"][0], "kind": "lava"}]})
+
+
+def test_report_png_is_written(tmp_path):
+    r = _record()
+    r.set_score(60.0, 1.0, [])
+    path = os.path.join(tmp_path, "report.png")
+    write_report(r, path)
+    with open(path, "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert os.path.getsize(path) > 10000
+    json.dumps(r.summary(1.0))
+
+
+def test_a_feed_without_a_pose_is_no_place():
+    """An agent's feed before its UAL's first pose carries an empty PoseStamped: (0, 0, 0) is not where the
+    robot is (it once made a 0.56 m "closest approach" of the UGV and a UAV taking off)."""
+    from mbzirc_comm_objs.msg import AgentDataFeed
+    from mbzirc_central_unit.world_model import feed_position
+    f = AgentDataFeed()
+    assert feed_position(f) is None
+    f.pose.header.frame_id = "arena"
+    f.pose.pose.position.x, f.pose.pose.position.y, f.pose.pose.position.z = 4.0, -4.0, 0.2
+    assert feed_position(f) == (4.0, -4.0, 0.2)
+    f.pose.pose.position.y = math.nan
+    assert feed_position(f) is None

@@ -1,0 +1,134 @@
+"""Object estimator: association, confirmation, loss, statuses."""
+import numpy as np
+import pytest
+
+from mbzirc_agents import constants as C
+from object_estimation.core import Detection, ObjectEstimator, classify_fire
+
+
+def det(p, t=0.0, agent='1', typ=C.TYPE_FIRE, cov=None):
+    return Detection(type=typ, position=np.array(p, float),
+                     covariance=np.diag([1.5 ** 2, 1.5 ** 2, 0.25]) if cov is None else cov,
+                     stamp=t, agent_id=agent)
+
+
+def test_three_robots_one_fire_one_track():
+    est = ObjectEstimator(min_updates=3)
+    rng = np.random.default_rng(0)
+    truth = np.array([12.4, 19.5, 6.5])
+    for k in range(30):
+        for agent in ('1', '2', '3'):
+            est.add(det(truth + rng.normal(0, 0.5, 3), t=k * 0.1, agent=agent))
+    objs = est.objects()
+    assert len(objs) == 1
+    assert objs[0].agents == {'1', '2', '3'}
+    assert objs[0].status == C.STATUS_ACTIVE
+    assert np.linalg.norm(objs[0].position - truth) < 0.3
+    assert objs[0].covariance[0, 0] < 1.5 ** 2 / 10      # fused: more certain than one detection
+
+
+def test_two_fires_far_apart_two_tracks_and_types_kept_apart():
+    est = ObjectEstimator(min_updates=1)
+    est.add(det((0, 0, 0)))
+    est.add(det((10, 0, 0)))
+    est.add(det((0, 0, 0), typ=C.TYPE_HOLE))
+    assert len(est.tracks) == 3
+
+
+def test_confirmation_needs_min_updates():
+    est = ObjectEstimator(min_updates=3)
+    est.add(det((0, 0, 0)))
+    est.add(det((0.1, 0, 0)))
+    assert est.objects() == [] and len(est.objects(include_tentative=True)) == 1
+    assert est.objects(include_tentative=True)[0].status == C.STATUS_DETECTED
+    est.add(det((0, 0.1, 0)))
+    assert est.objects()[0].status == C.STATUS_ACTIVE
+
+
+def test_lost_and_found_again_and_tentative_dropped():
+    est = ObjectEstimator(min_updates=2, lost_time=5.0)
+    for t in (0.0, 1.0):
+        est.add(det((0, 0, 0), t=t))
+    est.add(det((20, 20, 0), t=1.0))              # tentative
+    est.tick(3.0)
+    assert est.objects()[0].status == C.STATUS_ACTIVE and len(est.tracks) == 2
+    est.tick(7.0)
+    assert est.objects()[0].status == C.STATUS_LOST
+    assert len(est.tracks) == 1                    # the tentative one was dropped
+    est.add(det((0, 0, 0), t=8.0))
+    assert est.objects()[0].status == C.STATUS_ACTIVE
+
+
+def test_set_status_sticky_and_errors():
+    est = ObjectEstimator(min_updates=1)
+    tid = est.add(det((0, 0, 0))).id
+    assert est.set_status(tid, C.STATUS_EXTINGUISHED) == ''
+    est.add(det((0.2, 0, 0), t=1.0))
+    assert est.tracks[tid].status == C.STATUS_EXTINGUISHED and len(est.tracks) == 1
+    assert 'unknown object id' in est.set_status(999, C.STATUS_ACTIVE)
+    assert 'type' in est.set_status(tid, C.STATUS_ACTIVE, object_type=C.TYPE_HOLE)
+    assert 'unknown status' in est.set_status(tid, 77)
+
+
+def test_bad_covariance_replaced_and_nan_rejected():
+    est = ObjectEstimator(min_updates=1)
+    t = est.add(det((0, 0, 0), cov=np.full((3, 3), np.nan)))
+    assert np.all(np.isfinite(t.covariance))
+    with pytest.raises(ValueError):
+        est.add(det((np.nan, 0, 0)))
+
+
+def test_classify_fire():
+    assert classify_fire((1, 14, 0), C.BUILDINGS) == C.SUBTYPE_GROUND
+    assert classify_fire((12.4, 19.5, 6.5), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((23.7, 19.5, 0.75), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((16, 12, 1.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
+    # 0.8 m out from facade D, above the one-storey extension: a facade fire, not one inside the extension
+    assert classify_fire((25.0, 18.8, 12.5), C.BUILDINGS) == C.SUBTYPE_FACADE
+    assert classify_fire((30.0, 12.0, 2.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
+
+
+def test_noise_tails_do_not_start_duplicate_tracks():
+    """At 1 m noise a Euclidean-only gate left duplicates (bench_agents); Mahalanobis + merge does not."""
+    est = ObjectEstimator(min_updates=5)
+    rng = np.random.default_rng(4)
+    truth = np.array([17.4, 19.5, 10.5])
+    cov = np.diag([1.0, 1.0, 0.25])
+    for k in range(400):
+        est.add(det(truth + rng.normal(0, [1.0, 1.0, 0.5]), t=k * 0.05, agent=str(k % 3), cov=cov))
+    assert len(est.objects()) == 1
+    assert np.linalg.norm(est.objects()[0].position - truth) < 0.3
+
+
+def test_fires_on_two_floors_stay_apart():
+    est = ObjectEstimator(min_updates=1)
+    rng = np.random.default_rng(5)
+    for k in range(100):
+        est.add(det(np.array([11.4, 8.5, 6.0]) + rng.normal(0, 0.3, 3), t=k * 0.1))
+        est.add(det(np.array([11.4, 8.5, 12.5]) + rng.normal(0, 0.3, 3), t=k * 0.1))
+    assert len(est.objects()) == 2
+
+
+def test_an_extinguished_fire_does_not_swallow_a_fire_next_to_it():
+    """A facade fire put out at A_2 and, 3.2 m away behind the wall, the floor-2 indoor fire seen with the
+    fire detector's default covariance (1.5 m^2): the indoor fire gets its own ACTIVE track."""
+    est = ObjectEstimator(min_updates=3)
+    facade = np.array([17.4, 19.5, 10.5])
+    for k in range(10):
+        est.add(det(facade, t=k * 0.1))
+    (fid,) = [t.id for t in est.objects()]
+    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    indoor = np.array([17.9, 16.5, 11.5])
+    cov = np.diag([1.5, 1.5, 0.5])
+    rng = np.random.default_rng(7)
+    for k in range(20):
+        est.add(det(indoor + rng.normal(0, 0.2, 3), t=2.0 + k * 0.1, cov=cov))
+    tracks = {t.id: t for t in est.objects()}
+    assert len(tracks) == 2
+    assert tracks[fid].status == C.STATUS_EXTINGUISHED
+    assert np.linalg.norm(tracks[fid].position - facade) < 0.05        # not dragged towards the other fire
+    (other,) = [t for t in tracks.values() if t.id != fid]
+    assert other.status == C.STATUS_ACTIVE and np.linalg.norm(other.position - indoor) < 0.3
+    # leftover heat right at the extinguished fire still goes to it (no duplicate track)
+    est.add(det(facade + np.array([0.3, 0.0, 0.0]), t=5.0, cov=cov))
+    assert len(est.objects()) == 2

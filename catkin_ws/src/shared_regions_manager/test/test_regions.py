@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""rostest: /ask_for_region and /free_regions of the region_manager node."""
+import random
+import threading
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PointStamped
+from mbzirc_comm_objs.srv import AskForRegion, AskForRegionRequest, FreeRegions, FreeRegionsRequest
+
+
+def box_req(agent, label, lo, hi):
+    r = AskForRegionRequest(agent_id=agent, label=label)
+    r.min_corner, r.max_corner = PointStamped(), PointStamped()
+    r.min_corner.header.frame_id = r.max_corner.header.frame_id = 'arena'
+    r.min_corner.point.x, r.min_corner.point.y, r.min_corner.point.z = lo
+    r.max_corner.point.x, r.max_corner.point.y, r.max_corner.point.z = hi
+    return r
+
+
+class TestRegions(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('test_regions')
+        rospy.wait_for_service('/ask_for_region', 20)
+        rospy.wait_for_service('/free_regions', 20)
+
+    def setUp(self):
+        self.ask = rospy.ServiceProxy('/ask_for_region', AskForRegion)
+        self.free = rospy.ServiceProxy('/free_regions', FreeRegions)
+        for a in ('a', 'b'):
+            self.free(FreeRegionsRequest(agent_id=a, free_all=True))
+
+    def test_overlap_refused_then_granted_after_free(self):
+        self.assertTrue(self.ask(box_req('a', 'go_to', (0, 0, 0), (5, 5, 5))).success)
+        self.assertFalse(self.ask(box_req('b', 'go_to', (4, 4, 4), (9, 9, 9))).success)
+        self.assertTrue(self.ask(box_req('b', 'other', (6, 6, 6), (9, 9, 9))).success)
+        self.assertTrue(self.free(FreeRegionsRequest(agent_id='a', label='go_to')).success)
+        self.assertTrue(self.ask(box_req('b', 'go_to', (4, 4, 4), (9, 9, 9))).success)
+
+    def test_nan_box_refused(self):
+        self.assertFalse(self.ask(box_req('a', 'x', (float('nan'), 0, 0), (1, 1, 1))).success)
+
+    def test_concurrent_overlapping_requests_never_both_granted(self):
+        """Both agents race for the same corridor 50 times; at most one holds it each round."""
+        for rnd in range(50):
+            results = {}
+            x = random.uniform(-5, 5)
+
+            def ask(agent, lo, hi):
+                results[agent] = rospy.ServiceProxy('/ask_for_region', AskForRegion)(
+                    box_req(agent, 'race', lo, hi)).success
+            t1 = threading.Thread(target=ask, args=('a', (x, 0, 2), (x + 4, 2, 4)))
+            t2 = threading.Thread(target=ask, args=('b', (x + 2, 1, 3), (x + 6, 3, 5)))
+            t1.start(); t2.start(); t1.join(); t2.join()
+            self.assertFalse(results['a'] and results['b'], f'round {rnd}: both granted')
+            self.assertTrue(results['a'] or results['b'], f'round {rnd}: none granted')
+            for a in ('a', 'b'):
+                self.free(FreeRegionsRequest(agent_id=a, label='race'))
+
+
+if __name__ == '__main__':
+    rostest.rosrun('shared_regions_manager', 'test_regions', TestRegions)
