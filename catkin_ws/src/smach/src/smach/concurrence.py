@@ -135,6 +135,9 @@ class Concurrence(Container):
             self._user_code_exception = None
             self._forwarded = set()
             self._child_outcomes = {label: None for label in self._states}
+            if self._preempt_requested:
+                # passed on before the start (upstream #37 ignored it): every child starts preempted
+                self._forward_preempt()
         try:
             self._copy_input_keys(parent_ud, self.userdata)
             log.loginfo("Concurrence starting with userdata: \n\t%s" % list(self.userdata.keys()))
@@ -165,27 +168,24 @@ class Concurrence(Container):
             with self._done_cond:
                 forwarded = set(self._forwarded)
                 preempted = self._preempt_requested
-            if preempted and forwarded:
-                serviced = True
-                for label in forwarded:
-                    if self._states[label].preempt_requested():
-                        serviced = False
-                        log.logwarn("State '%s' in concurrence did not service preempt." % label)
-                        self._states[label].recall_preempt()
-                if serviced:
-                    log.loginfo("Concurrence serviced preempt.")
-                    self.service_preempt()
-            elif preempted:
-                # it arrived when every child had already finished: nobody serviced it, so the flag stays
-                # and the parent passes it on (upstream silently dropped it here)
-                log.loginfo("Concurrence preempted after all its children finished; leaving it to the parent.")
-            # children preempted by the policy: withdraw the requests they did not service
-            for label in running:
-                if label not in forwarded and self._states[label].preempt_requested():
-                    self._states[label].recall_preempt()
+            children_serviced = self._recall_unserviced(running, forwarded)
             outcomes = dict(self._child_outcomes)
             log.loginfo("Concurrent Outcomes: " + str(outcomes))
-            outcome = self._decide_outcome(outcomes)
+            if preempted and "preempted" in self.get_registered_outcomes():
+                # the container honours its parent's preempt itself, whatever its children did and
+                # however late the request came (upstream #98 returned the mapped outcome)
+                log.loginfo("Concurrence preempted: outcome 'preempted'.")
+                self.service_preempt()
+                outcome = "preempted"
+            else:
+                if preempted and forwarded and children_serviced:
+                    log.loginfo("Concurrence serviced preempt.")
+                    self.service_preempt()
+                elif preempted:
+                    # nobody serviced it (e.g. every child had already ended, upstream #53): the flag
+                    # stays and the parent passes it on
+                    log.loginfo("Concurrence preempted but not serviced; leaving it to the parent.")
+                outcome = self._decide_outcome(outcomes)
             self.call_termination_cbs(list(self._states.keys()), outcome)
             self._copy_output_keys(self.userdata, parent_ud)
             return outcome
@@ -193,6 +193,18 @@ class Concurrence(Container):
             self._threads = {}
             with self._done_cond:
                 self._is_running = False
+
+    def _recall_unserviced(self, running: list, forwarded: set) -> bool:
+        """Withdraw the preempt requests that children did not service (they must be reusable); returns
+        whether every child that got the container's own preempt serviced it."""
+        serviced = True
+        for label in set(running) | forwarded:
+            if self._states[label].preempt_requested():
+                if label in forwarded:
+                    serviced = False
+                    log.logwarn("State '%s' in concurrence did not service preempt." % label)
+                self._states[label].recall_preempt()
+        return serviced
 
     def _decide_outcome(self, outcomes: dict) -> str:
         """Apply outcome_map (most specific match), then outcome_cb, else the default outcome."""
@@ -258,11 +270,15 @@ class Concurrence(Container):
         with self._done_cond:
             self._preempt_requested = True
             if self._is_running:
-                for label, outcome in self._child_outcomes.items():
-                    if outcome is None and label not in self._forwarded:
-                        self._forwarded.add(label)
-                        self._states[label].request_preempt()
+                self._forward_preempt()
             self._done_cond.notify_all()
+
+    def _forward_preempt(self) -> None:
+        """Pass this container's preempt to every child still running that has not had it (lock held)."""
+        for label, outcome in self._child_outcomes.items():
+            if outcome is None and label not in self._forwarded:
+                self._forwarded.add(label)
+                self._states[label].request_preempt()
 
     def recall_preempt(self) -> None:
         with self._done_cond:
