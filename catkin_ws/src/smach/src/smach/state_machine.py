@@ -262,10 +262,14 @@ class StateMachine(Container):
 
     # ---- preemption -----------------------------------------------------------------------------
     def _preempt_current_state(self) -> None:
-        """Forward the preempt to the current child (it may not be executing yet)."""
-        if self._current_state is None or self._preempted_state is self._current_state:
+        """Forward the preempt to the current child (it may not be executing yet).
+
+        A child that already got a preempt is asked again: it may have serviced the last request, and
+        this one is new (upstream #88 skipped it, so the next state never saw the second preempt).
+        """
+        if self._current_state is None:
             return
-        if self._preempted_state is not None:
+        if self._preempted_state is not None and self._preempted_state is not self._current_state:
             self._preempted_state.recall_preempt()
         self._preempted_state = self._current_state
         self._preempted_label = self._current_label
