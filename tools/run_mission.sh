@@ -7,15 +7,17 @@
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0
+SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
-    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*) declare "$kv" ;;
+    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*) declare "$kv" ;;
     *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
   esac
 done
 [[ "$SEED" =~ ^[0-9]+$ && "$UAVS" =~ ^[0-3]$ && "$RTF" =~ ^[0-9]+([.][0-9]+)?$ ]] \
   || { echo "run_mission.sh: SEED must be an integer, UAVS 0..3, RTF a number" >&2; exit 2; }
 record=false; [ "$RECORD" = 1 ] || [ "$RECORD" = true ] && record=true
+smach_debug=false; [ "$SMACH_DEBUG" = 1 ] || [ "$SMACH_DEBUG" = true ] && smach_debug=true
 # shellcheck disable=SC1091
 set +u; source "$ROOT/env.sh"; set -u
 [ -n "$OUT" ] || OUT="$ROOT/results/mission_$(date +%Y%m%d_%H%M%S)_seed${SEED}"
@@ -30,7 +32,7 @@ echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, record $record -> $OU
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
-  duration:="$DURATION" > "$LOG" 2>&1 &
+  duration:="$DURATION" smach_debug:="$smach_debug" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
 stop() {
   if kill -0 "$LAUNCH_PID" 2>/dev/null; then

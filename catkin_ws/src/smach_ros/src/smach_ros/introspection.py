@@ -16,28 +16,36 @@ node (``/ns/node/intro/smach/...``), ``'/intro'`` is global.
   The whole topic can be turned off: ``~smach_allow_init`` param / ``allow_init`` argument (default True,
   as upstream).
 
+A debugger (breakpoints, pause/step, forced outcomes, a bounded userdata inspector) is offered under
+``<server_name>/smach/debug/...`` when the ``~smach_allow_debug`` param (or ``allow_debug`` argument) is
+True; see :mod:`smach_ros.debugger`. Default off.
+
 Userdata keys can be left out of ``local_data`` (``exclude_keys`` argument, ``~smach_exclude_keys``
 param); values that cannot be pickled, or that are too big, are summarised as text (upstream #18, #77).
 """
 from __future__ import annotations
 
+import json
 import threading
 import time
 from typing import Any, Iterable, Optional
 
 import rospy
-from std_msgs.msg import Header
+from std_msgs.msg import Header, String
 from smach_msgs.msg import SmachContainerInitialStatusCmd, SmachContainerStatus, SmachContainerStructure
 
 import smach
+from smach_ros.debugger import StateDebugger
 from smach_ros.userdata_codec import DecodeError, contains_opaque, decode_local_data, encode_local_data
 
 __all__ = ["IntrospectionServer", "IntrospectionClient", "ContainerProxy", "STATUS_TOPIC", "INIT_TOPIC",
-           "STRUCTURE_TOPIC", "child_path"]
+           "STRUCTURE_TOPIC", "DEBUG_STATUS_TOPIC", "DEBUG_COMMAND_TOPIC", "child_path"]
 
 STATUS_TOPIC = "/smach/container_status"
 INIT_TOPIC = "/smach/container_init"
 STRUCTURE_TOPIC = "/smach/container_structure"
+DEBUG_STATUS_TOPIC = "/smach/debug/status"
+DEBUG_COMMAND_TOPIC = "/smach/debug/command"
 HEARTBEAT_S = 2.0  # wall seconds: the heartbeat also serves viewers that join late, whatever the clock
 
 
@@ -158,19 +166,28 @@ class IntrospectionServer:
         allow_unpickle: trust pickles in container_init (default: the ``~smach_allow_unpickle`` param,
             False).
         allow_init: listen to container_init at all (default: the ``~smach_allow_init`` param, True).
-        exclude_keys: userdata keys never sent in status messages (default: the ``~smach_exclude_keys``
-            param, none).
+        exclude_keys: userdata keys never sent in status messages nor shown by the debugger (default: the
+            ``~smach_exclude_keys`` param, none).
+        allow_debug: offer the debugger (default: the ``~smach_allow_debug`` param, False).
+        breakpoints: state paths the debugger stops on from the start (with the ``~smach_debug_breakpoints``
+            param and states marked by :func:`smach_ros.debugger.breakpoint_here`).
     """
 
     def __init__(self, server_name: str, state: smach.State, path: str,
                  allow_unpickle: Optional[bool] = None, allow_init: Optional[bool] = None,
-                 exclude_keys: Optional[Iterable[str]] = None) -> None:
+                 exclude_keys: Optional[Iterable[str]] = None, allow_debug: Optional[bool] = None,
+                 breakpoints: Iterable[str] = ()) -> None:
         self._server_name = server_name  # rospy resolves it (relative, '~' or global) when advertising
         self._state = state
         self._path = path
         self._allow_unpickle = allow_unpickle
         self._allow_init = allow_init
         self._exclude_keys = exclude_keys
+        self._allow_debug = allow_debug
+        self._breakpoints = list(breakpoints)
+        self._debugger: Optional[StateDebugger] = None
+        self._debug_pub: Optional[rospy.Publisher] = None
+        self._debug_sub: Optional[rospy.Subscriber] = None
         self._proxies: list[ContainerProxy] = []
         self._keep_running = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -197,9 +214,29 @@ class IntrospectionServer:
         if self._allow_init:
             self._init_sub = rospy.Subscriber(self._server_name + INIT_TOPIC, SmachContainerInitialStatusCmd,
                                               self._init_cb, queue_size=10)
+        self._start_debugger()
         self._keep_running.set()
         self._thread = threading.Thread(name=self._server_name + ":heartbeat", target=self._heartbeat, daemon=True)
         self._thread.start()
+
+    def _start_debugger(self) -> None:
+        """Offer the debugger if allowed; else say (latched) that it is not."""
+        if self._allow_debug is None:
+            self._allow_debug = bool(rospy.get_param("~smach_allow_debug", False))
+        self._debug_pub = rospy.Publisher(self._server_name + DEBUG_STATUS_TOPIC, String, queue_size=10, latch=True)
+        if not self._allow_debug:
+            self._debug_pub.publish(String(data=json.dumps(
+                {"allowed": False, "reason": "debugging is off on this server (~smach_allow_debug)"})))
+            return
+        rospy.logwarn("IntrospectionServer %s offers the SMACH debugger (smach_allow_debug): anyone on the ROS "
+                      "network can pause this machine and force outcomes." % self._server_name)
+        breakpoints = self._breakpoints + [str(p) for p in rospy.get_param("~smach_debug_breakpoints", [])]
+        pub = self._debug_pub
+        self._debugger = StateDebugger(self._state, self._path, lambda text: pub.publish(String(data=text)),
+                                       breakpoints, self._exclude_keys or (), is_shutdown=rospy.is_shutdown)
+        self._debugger.install()
+        self._debug_sub = rospy.Subscriber(self._server_name + DEBUG_COMMAND_TOPIC, String,
+                                           lambda msg: self._debugger.handle_command(msg.data), queue_size=20)
 
     def construct(self, server_name: str, state: smach.State, path: str) -> None:
         """Create a proxy for ``state`` and, recursively, for every container below it."""
@@ -236,10 +273,13 @@ class IntrospectionServer:
             proxy.stop()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(1.0)
-        for handle in (self._init_sub, self._structure_pub, self._status_pub):
+        if self._debugger is not None:
+            self._debugger.uninstall()
+            self._debugger = None
+        for handle in (self._init_sub, self._structure_pub, self._status_pub, self._debug_sub, self._debug_pub):
             if handle is not None:
                 handle.unregister()
-        self._init_sub = self._structure_pub = self._status_pub = None
+        self._init_sub = self._structure_pub = self._status_pub = self._debug_sub = self._debug_pub = None
 
     def clear(self) -> None:
         self.stop()

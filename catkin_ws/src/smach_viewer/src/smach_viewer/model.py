@@ -5,10 +5,11 @@ messages; the web server reads JSON snapshots and DOT graphs from it. Thread-saf
 """
 from __future__ import annotations
 
+import json
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Iterable, Optional
 
 from smach_ros.userdata_codec import DecodeError, decode_local_data, to_plain
 
@@ -47,6 +48,7 @@ class ViewerModel:
         self._servers: dict[str, dict[str, ContainerView]] = {}
         self._structure_version: dict[str, int] = {}
         self._last_seen: dict[str, float] = {}
+        self._debug: dict[str, dict] = {}  # server -> its last debug status (see smach_ros.debugger)
         self.version = 0
 
     # ---- updates --------------------------------------------------------------------------------
@@ -103,9 +105,23 @@ class ViewerModel:
             view.info = info
             self._bump()
 
+    def update_debug(self, server: str, status_json: str) -> None:
+        """Store a server's debug status (JSON text); malformed text raises ValueError."""
+        status = json.loads(status_json)
+        if not isinstance(status, dict) or not isinstance(status.get("allowed"), bool):
+            raise ValueError("debug status must be a JSON object with a boolean 'allowed'")
+        with self._lock:
+            self._debug[server] = status
+            self._bump()
+
+    def debug(self, server: str) -> Optional[dict]:
+        with self._lock:
+            return self._debug.get(server)
+
     def remove_server(self, server: str) -> None:
         with self._lock:
-            if self._servers.pop(server, None) is not None:
+            had_debug = self._debug.pop(server, None) is not None
+            if self._servers.pop(server, None) is not None or had_debug:
                 self._structure_version.pop(server, None)
                 self._last_seen.pop(server, None)
                 self._bump()
@@ -132,6 +148,7 @@ class ViewerModel:
             out = {"version": self.version, "servers": {}}
             for server, containers in sorted(self._servers.items()):
                 out["servers"][server] = {
+                    "debug": self._debug.get(server),
                     "structure_version": self._structure_version.get(server, 0),
                     "stale": now - self._last_seen.get(server, now) > STALE_AFTER_S,
                     "containers": {
@@ -143,13 +160,14 @@ class ViewerModel:
                 }
             return out
 
-    def dot(self, server: str) -> Optional[str]:
+    def dot(self, server: str, collapsed: Iterable[str] = ()) -> Optional[str]:
+        """The DOT graph of ``server``; containers whose path is in ``collapsed`` are drawn as one node."""
         with self._lock:
             containers = self._servers.get(server)
             if not containers:
                 return None
             copies = {p: ContainerView(**vars(v)) for p, v in containers.items()}
-        return build_dot(server, copies)
+        return build_dot(server, copies, set(collapsed))
 
 
 # ---- DOT ------------------------------------------------------------------------------------------
@@ -170,9 +188,13 @@ def outcome_id(path: str, outcome: str) -> str:
     return "o:" + path + ":" + outcome
 
 
-def build_dot(server: str, containers: dict) -> str:
+def build_dot(server: str, containers: dict, collapsed: Optional[set] = None) -> str:
     """A DOT graph of one server's tree: containers as clusters, states as ellipses, container outcomes
-    as boxes; every element carries an ``id`` the page uses to highlight it."""
+    as boxes; every element carries an ``id`` the page uses to highlight it. A container in ``collapsed``
+    is drawn as a single box (id ``s:<path>``, like a state) with every edge of its cluster on it."""
+    collapsed = collapsed or set()
+    containers = {p: v for p, v in containers.items()
+                  if not any(p.startswith(c + "/") for c in collapsed)}  # inside a collapsed one: hidden
     roots = [p for p in containers if p.rsplit("/", 1)[0] not in containers]
     lines = ["digraph smach {", "  compound=true; rankdir=TB; newrank=true;",
              '  graph [fontname="Helvetica", fontsize=12];', '  node [fontname="Helvetica", fontsize=11];',
@@ -187,6 +209,8 @@ def build_dot(server: str, containers: dict) -> str:
         targets = view.initial_states or view.children
         for label in targets:
             child = path + "/" + label
+            if child in collapsed:
+                return child
             if child in containers and containers[child].has_structure:
                 inner = anchor(child)
                 if inner:
@@ -209,7 +233,10 @@ def build_dot(server: str, containers: dict) -> str:
                          % (ind, _q(path + ":?"), _q("w:" + path)))
         for child in view.children:
             child_path = path + "/" + child
-            if child_path in containers:
+            if child_path in collapsed and child_path in containers:
+                lines.append("%s  %s [id=%s, label=%s, shape=box3d, style=filled, fillcolor=\"#ffffff\"];"
+                             % (ind, _q(child_path), _q(state_id(child_path)), _q(child + " [+]")))
+            elif child_path in containers:
                 emit(child_path, depth + 1)
             else:
                 lines.append("%s  %s [id=%s, label=%s, shape=ellipse, style=filled, fillcolor=\"#ffffff\"];"
@@ -221,7 +248,9 @@ def build_dot(server: str, containers: dict) -> str:
         for outcome, src, dst in view.edges():
             src_path = path + "/" + src
             attrs = ["label=" + _q(outcome)]
-            if src_path in containers:
+            if src_path in collapsed:
+                tail = src_path
+            elif src_path in containers:
                 inner = containers[src_path]
                 if outcome in inner.container_outcomes:
                     tail = src_path + ":" + outcome
@@ -236,7 +265,9 @@ def build_dot(server: str, containers: dict) -> str:
                 dst = outcome
             dst_path = path + "/" + dst
             if dst in view.children:
-                if dst_path in containers:
+                if dst_path in collapsed:
+                    head = dst_path
+                elif dst_path in containers:
                     head = anchor(dst_path)
                     attrs.append("lhead=" + _q("cluster_" + dst_path))
                 else:

@@ -1,12 +1,16 @@
 """ROS side of the viewer: finds introspection servers on the graph, feeds the model, sends init commands."""
 from __future__ import annotations
 
+import json
 import threading
 from typing import Optional
 
 import rospy
 from smach_msgs.msg import SmachContainerInitialStatusCmd, SmachContainerStatus, SmachContainerStructure
+from std_msgs.msg import String
 
+from smach_ros.debugger import COMMANDS
+from smach_ros.introspection import DEBUG_COMMAND_TOPIC, DEBUG_STATUS_TOPIC
 from smach_ros.userdata_codec import encode_local_data
 from smach_viewer.model import ViewerModel
 
@@ -25,6 +29,7 @@ class IntrospectionWatcher:
         self._period = discovery_period
         self._subs: dict[str, tuple] = {}
         self._init_pubs: dict[str, rospy.Publisher] = {}
+        self._debug_pubs: dict[str, rospy.Publisher] = {}
         self._lock = threading.Lock()
         self._timer: Optional[rospy.Timer] = None
         self._stop = threading.Event()
@@ -58,14 +63,17 @@ class IntrospectionWatcher:
                     rospy.Subscriber(server + STRUCTURE_SUFFIX, SmachContainerStructure, self._on_structure,
                                      callback_args=server, queue_size=50),
                     rospy.Subscriber(server + STATUS_SUFFIX, SmachContainerStatus, self._on_status,
-                                     callback_args=server, queue_size=100))
+                                     callback_args=server, queue_size=100),
+                    rospy.Subscriber(server + DEBUG_STATUS_TOPIC, String, self._on_debug, callback_args=server,
+                                     queue_size=20))
             for server in set(self._subs) - servers:
                 rospy.loginfo("web_viewer: introspection server %s is gone" % server)
                 for sub in self._subs.pop(server):
                     sub.unregister()
-                pub = self._init_pubs.pop(server, None)
-                if pub is not None:
-                    pub.unregister()
+                for pubs in (self._init_pubs, self._debug_pubs):
+                    pub = pubs.pop(server, None)
+                    if pub is not None:
+                        pub.unregister()
                 self._model.remove_server(server)
 
     def _on_structure(self, msg: SmachContainerStructure, server: str) -> None:
@@ -81,6 +89,29 @@ class IntrospectionWatcher:
                                       msg.local_data, msg.info)
         except ValueError as ex:
             rospy.logerr_throttle(5.0, "web_viewer: bad status message from %s: %s" % (server, ex))
+
+    def _on_debug(self, msg: String, server: str) -> None:
+        try:
+            self._model.update_debug(server, msg.data)
+        except ValueError as ex:
+            rospy.logerr_throttle(5.0, "web_viewer: bad debug status from %s: %s" % (server, ex))
+
+    def send_debug(self, server: str, command: dict) -> str:
+        """Send a debugger command (see smach_ros.debugger); returns an error text, or "" when sent."""
+        debug = self._model.debug(server)
+        if debug is None:
+            return "server %r offers no debugger" % server
+        if not debug.get("allowed"):
+            return "debugging is not allowed on %s (~smach_allow_debug)" % server
+        if command.get("cmd") not in COMMANDS:
+            return "unknown command %r" % command.get("cmd")
+        with self._lock:
+            pub = self._debug_pubs.get(server)
+            if pub is None:
+                pub = self._debug_pubs[server] = rospy.Publisher(server + DEBUG_COMMAND_TOPIC, String, queue_size=20)
+        threading.Thread(target=self._publish_when_connected, args=(pub, String(data=json.dumps(command))),
+                         daemon=True).start()
+        return ""
 
     def set_initial_state(self, server: str, path: str, state: str) -> str:
         """Send an init command; returns an error text, or "" when sent.
@@ -106,7 +137,7 @@ class IntrospectionWatcher:
         return ""
 
     @staticmethod
-    def _publish_when_connected(pub: rospy.Publisher, msg: SmachContainerInitialStatusCmd) -> None:
+    def _publish_when_connected(pub: rospy.Publisher, msg: object) -> None:
         import time
         deadline = time.monotonic() + 3.0
         while pub.get_num_connections() == 0 and time.monotonic() < deadline and not rospy.is_shutdown():
