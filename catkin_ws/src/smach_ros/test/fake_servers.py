@@ -1,7 +1,8 @@
 """Action and service servers used by the smach_ros integration tests (importable or runnable).
 
 TestAction goal codes: g >= 0 succeed after g ms with result g + 1 (cancellable); -1 abort at once;
--2 ignore cancels and succeed after 10 s; -3 run until cancelled (then preempted).
+-2 ignore cancels and succeed after 10 s; -3 run until cancelled (then preempted); -4 run until
+cancelled, then report the goal SUCCEEDED (a server that calls a cancelled goal a success).
 """
 import sys
 import threading
@@ -28,6 +29,9 @@ class FakeActionServer:
         while not rospy.is_shutdown():
             if (g >= 0 and time.monotonic() - start >= g / 1000.0) or (g == -2 and time.monotonic() - start >= 10.0):
                 self.server.set_succeeded(TestResult(result=g + 1))
+                return
+            if self.server.is_preempt_requested() and g == -4:
+                self.server.set_succeeded(TestResult(result=-4))
                 return
             if self.server.is_preempt_requested() and g != -2:
                 self.server.set_preempted(TestResult(result=-3))

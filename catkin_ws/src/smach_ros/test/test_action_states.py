@@ -101,6 +101,44 @@ class TestSimpleActionState(unittest.TestCase):
         self.assertEqual(st.execute(smach.UserData()), "succeeded")
         self.assertEqual(st.execute(smach.UserData()), "succeeded")
 
+    def wait_active(self, st):
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and st._client.get_state() != GoalStatus.ACTIVE:
+            time.sleep(0.02)
+        self.assertEqual(st._client.get_state(), GoalStatus.ACTIVE)
+
+    def test_52_reusable_after_preempt_that_server_reports_as_success(self):
+        # ros/executive_smach#52: the server called the cancelled goal SUCCEEDED, the state kept its
+        # preempt request, and its next run ended 'preempted' at once without sending a goal
+        st = smach_ros.SimpleActionState(SERVER, TestAction, goal=TestGoal(goal=-4), result_key="res")
+        t, box = run_async(st)
+        self.wait_active(st)
+        st.request_preempt()
+        t.join(5)
+        self.assertEqual(box.get("o"), "preempted")
+        self.assertFalse(st.preempt_requested())
+        st._goal = TestGoal(goal=20)
+        n_goals = len(self.server.goals)
+        self.assertEqual(st.execute(smach.UserData()), "succeeded")
+        self.assertEqual(self.server.goals[n_goals:], [20])
+
+    def test_88_machine_of_action_states_preempted_twice(self):
+        # ros/executive_smach#88: A --preempted--> B --preempted--> C; the second preempt must cancel B's goal
+        a = smach_ros.SimpleActionState(SERVER, TestAction, goal=TestGoal(goal=-3))
+        b = smach_ros.SimpleActionState(SERVER, TestAction, goal=TestGoal(goal=-3))
+        sm = smach.StateMachine(outcomes=["at_c", "at_d", "aborted"])
+        with sm:
+            smach.StateMachine.add("A", a, transitions={"preempted": "B", "succeeded": "at_d"})
+            smach.StateMachine.add("B", b, transitions={"preempted": "C", "succeeded": "at_d"})
+            smach.StateMachine.add("C", smach.CBState(lambda ud: "at_c", outcomes=["at_c"]))
+        t, box = run_async(sm)
+        for state in (a, b):
+            self.wait_active(state)
+            sm.request_preempt()
+        t.join(10)
+        self.assertEqual(box.get("o"), "at_c")
+        self.assertFalse(sm.preempt_requested())
+
     def test_preempt_before_execute(self):
         st = smach_ros.SimpleActionState(SERVER, TestAction, goal=TestGoal(goal=20000))
         st.request_preempt()

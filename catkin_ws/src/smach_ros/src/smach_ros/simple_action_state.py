@@ -28,7 +28,9 @@ class SimpleActionState(smach.State):
     ``result_cb(ud, status, result)`` may choose the outcome.
 
     .. note:: Differences from upstream, on purpose: the state can run again right after a preemption
-       (all per-goal state is local to one ``execute``); ``exec_timeout`` cancels the goal and gives
+       (all per-goal state is local to one ``execute``, and a goal cancelled for a preempt always ends
+       as a serviced ``preempted``, whatever status the server gives it); ``exec_timeout`` cancels the
+       goal and gives
        ``aborted``; after a cancel, ``preempt_timeout`` bounds the wait for the server; and if the server
        disappears while the goal runs the state returns ``aborted`` instead of hanging.
     """
@@ -218,14 +220,18 @@ class SimpleActionState(smach.State):
                 ud[self._result_key] = result
             for key in self._result_slots:
                 ud[key] = getattr(result, key)
-        if status == GoalStatus.SUCCEEDED:
+        if cancel_reason == "preempt":
+            # the state cancelled the goal for a preempt: it honours the preempt whatever status the
+            # server gave the goal (upstream #52: a server that called it SUCCEEDED left the request
+            # set, and the state preempted itself at the start of its next run)
+            outcome = "preempted"
+        elif status == GoalStatus.SUCCEEDED:
             outcome = "succeeded"
-        elif cancel_reason == "preempt" or (status in (GoalStatus.PREEMPTED, GoalStatus.RECALLED)
-                                            and self.preempt_requested()):
+        elif status in (GoalStatus.PREEMPTED, GoalStatus.RECALLED) and self.preempt_requested():
             outcome = "preempted"
         else:
             outcome = "aborted"
-        if outcome == "preempted" or (cancel_reason == "preempt" and cb_outcome is not None):
+        if outcome == "preempted":
             self.service_preempt()
         if cb_outcome is not None:
             outcome = cb_outcome
