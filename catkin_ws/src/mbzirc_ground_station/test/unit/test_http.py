@@ -1,0 +1,135 @@
+"""HTTP checks (Host, Origin, content type) and the server's routes, commands and event stream."""
+import http.client
+import json
+
+import pytest
+
+from mbzirc_ground_station.commands import parse_command
+from mbzirc_ground_station.http_checks import allowed_hosts, check_host_origin, parse_json_body
+from mbzirc_ground_station.live import LiveSource
+from mbzirc_ground_station.state import GroundStationState
+from mbzirc_ground_station.web import GroundStationServer
+
+from msgs import feed
+
+ALLOWED = allowed_hosts("127.0.0.1", 8088)
+
+
+@pytest.mark.parametrize("host,origin,ok", [
+    ("127.0.0.1:8088", None, True), ("localhost:8088", "http://localhost:8088", True),
+    ("[::1]:8088", "http://127.0.0.1:8088", True),
+    ("evil.example:8088", None, False),             # DNS rebinding: a foreign name for our address
+    ("127.0.0.1:8088", "http://evil.example", False), ("127.0.0.1:8088", "null", False),
+    ("127.0.0.1:8088", "https://127.0.0.1:8088", False), (None, None, False), ("127.0.0.1:9999", None, False)])
+def test_host_and_origin(host, origin, ok):
+    assert (check_host_origin(host, origin, ALLOWED) is None) == ok
+
+
+def test_allowed_extra_names_and_bound_address():
+    a = allowed_hosts("0.0.0.0", 8088, ["gcs-laptop", "10.0.0.5:8088"])
+    assert {"gcs-laptop:8088", "10.0.0.5:8088", "127.0.0.1:8088"} <= a and "0.0.0.0:8088" not in a
+
+
+@pytest.mark.parametrize("ctype,length,body,ok", [
+    ("application/json", "2", b"{}", True), ("application/json; charset=utf-8", "2", b"{}", True),
+    ("text/plain", "2", b"{}", False), (None, "2", b"{}", False), ("application/json", None, b"{}", False),
+    ("application/json", "99999999", b"{}", False), ("application/json", "3", b"{x}", False),
+    ("application/json", "2", b"[]", False)])
+def test_json_body(ctype, length, body, ok):
+    obj, why = parse_json_body(ctype, length, lambda n: body[:n])
+    assert (obj is not None) == ok and (why == "") == ok
+
+
+def test_commands_checked():
+    assert parse_command({"command": "send_home", "robot": "2"}, ["1", "2"])[0].robot == "2"
+    assert parse_command({"command": "send_home", "robot": 2}, ["1", "2"])[0].robot == "2"
+    assert parse_command({"command": "send_home", "robot": "all"}, ["1"])[0].robot == "all"
+    assert parse_command({"command": "send_home", "robot": "7"}, ["1"])[0] is None
+    assert parse_command({"command": "send_home"}, ["1"])[0] is None
+    assert parse_command({"command": "self_destruct"}, ["1"])[0] is None
+    assert parse_command({"command": "land_all"}, [])[0].name == "land_all"
+
+
+@pytest.fixture
+def station():
+    calls = []
+    state = GroundStationState()
+    live = LiveSource(state, lambda: 5.0, run_command=lambda c: (calls.append(c), (True, "ok"))[1])
+    live.apply("/mbzirc2020_2/data_feed", feed("2", 1.0, 2.0, 3.0))
+    web = GroundStationServer(live, {"mode": "live", "arena": None}, live.command, "127.0.0.1", 0)
+    web.start()
+    yield web, calls
+    web.stop()
+
+
+def request(web, method, path, body=None, headers=None):
+    c = http.client.HTTPConnection("127.0.0.1", web.port, timeout=10)
+    h = {"Host": "127.0.0.1:%d" % web.port}
+    h.update(headers or {})
+    c.request(method, path, body=body, headers=h)
+    r = c.getresponse()
+    data = r.read()
+    c.close()
+    return r.status, r.getheader("Content-Type"), data
+
+
+def test_page_and_state(station):
+    web, _ = station
+    code, ctype, body = request(web, "GET", "/")
+    assert code == 200 and ctype.startswith("text/html") and b"EventSource" in body
+    code, ctype, body = request(web, "GET", "/api/state")
+    assert code == 200 and ctype == "application/json"
+    frame = json.loads(body)
+    assert frame["robots"][0]["pose"]["x"] == 1.0 and "tracks" in frame
+
+
+def test_foreign_host_and_origin_refused(station):
+    web, calls = station
+    assert request(web, "GET", "/", headers={"Host": "evil.example:%d" % web.port})[0] == 403
+    body = json.dumps({"command": "land_all"})
+    code, _, _ = request(web, "POST", "/api/command", body, {"Origin": "http://evil.example",
+                                                               "Content-Type": "application/json"})
+    assert code == 403 and calls == []
+
+
+def test_command_needs_json_content_type(station):
+    web, calls = station
+    body = json.dumps({"command": "land_all"})
+    assert request(web, "POST", "/api/command", body, {"Content-Type": "text/plain"})[0] == 415
+    assert calls == []
+
+
+def test_command_runs_and_is_logged(station):
+    web, calls = station
+    origin = "http://127.0.0.1:%d" % web.port
+    code, _, body = request(web, "POST", "/api/command", json.dumps({"command": "send_home", "robot": "2"}),
+                            {"Content-Type": "application/json", "Origin": origin})
+    assert code == 200 and json.loads(body)["ok"] is True and calls[0].name == "send_home"
+    code, _, body = request(web, "POST", "/api/command", json.dumps({"command": "send_home", "robot": "9"}),
+                            {"Content-Type": "application/json"})
+    assert code == 400 and len(calls) == 1
+    log = [e["text"] for e in json.loads(request(web, "GET", "/api/state")[2])["log"]]
+    assert log == ["send_home UAV 2: sent", "send_home UAV 2: done - ok", "refused: robot must be 'all' or one "
+                   "of ['2'], not '9'"]
+
+
+def test_replay_controls_refused_live(station):
+    web, _ = station
+    assert request(web, "POST", "/api/replay", json.dumps({"action": "play"}),
+                   {"Content-Type": "application/json"})[0] == 409
+
+
+def test_event_stream_starts_with_info_and_a_full_frame(station):
+    web, _ = station
+    c = http.client.HTTPConnection("127.0.0.1", web.port, timeout=10)
+    c.request("GET", "/api/events", headers={"Host": "127.0.0.1:%d" % web.port})
+    r = c.getresponse()
+    assert r.status == 200 and r.getheader("Content-Type") == "text/event-stream"
+    lines = []
+    while sum(1 for x in lines if x.startswith(b"data: ")) < 2:
+        lines.append(r.fp.readline())
+    events = [x for x in lines if x.startswith(b"event: ")]
+    data = [json.loads(x[6:]) for x in lines if x.startswith(b"data: ")]
+    assert events == [b"event: info\n", b"event: frame\n"]
+    assert data[0]["mode"] == "live" and "tracks" in data[1]
+    c.close()
