@@ -95,6 +95,15 @@ class HeadlessChromium:
             raise CdpError("JS error: %s" % res["exceptionDetails"])
         return res["result"].get("value")
 
+    def screenshot(self, path, width=1500, height=900):
+        """Save a PNG of the page (at ``width`` x ``height`` CSS pixels)."""
+        import base64
+        self.send("Emulation.setDeviceMetricsOverride", {"width": width, "height": height, "deviceScaleFactor": 1,
+                                                          "mobile": False}, session=self.session)
+        data = self.send("Page.captureScreenshot", {"format": "png"}, session=self.session)["data"]
+        with open(path, "wb") as f:
+            f.write(base64.b64decode(data))
+
     def requested_urls(self):
         with self._cond:
             return [e["params"]["request"]["url"] for e in self.events if e.get("method") == "Network.requestWillBeSent"]
