@@ -40,6 +40,27 @@ class FakeActionServer:
             time.sleep(0.01)
 
 
+class VerdictActionServer:
+    """Ends each TestAction goal at once by its code, like the reference server of executive_smach's
+    tests: 1 succeeds (empty result), 2 is aborted, 3 is rejected; any other code is left pending."""
+
+    def __init__(self, name):
+        self.server = actionlib.ActionServer(name, TestAction, goal_cb=self.on_goal, auto_start=False)
+        self.server.start()
+
+    @staticmethod
+    def on_goal(handle):
+        code = handle.get_goal().goal
+        if code == 3:
+            handle.set_rejected(None, "rejected by code")
+            return
+        handle.set_accepted()
+        if code == 1:
+            handle.set_succeeded(None, "succeeded by code")
+        elif code == 2:
+            handle.set_aborted(None, "aborted by code")
+
+
 if __name__ == "__main__":
     # standalone server (the test kills it to check that SimpleActionState notices a dead server)
     rospy.init_node("doomed_server", anonymous=True)
