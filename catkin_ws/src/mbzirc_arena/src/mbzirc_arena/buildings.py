@@ -1,0 +1,68 @@
+"""Rules on building footprints: which walls rise to a height, the nearest wall, inside or not, kind of a fire.
+
+Footprints are (x_min, y_min, x_max, y_max, top): the outline of a building and the height of its roof
+(`Building.footprint`). Every robot and the central unit decide with these same rules.
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+from . import messages as M
+
+
+def standing_at(p: Sequence[float], footprints: Sequence[Sequence[float]], clearance: float = 0.5) -> list:
+    """The buildings whose walls rise to p's height (top above p[2] - clearance); all of them for a 2D p.
+
+    Rule: a wall counts only up to its roof. The one-storey extension is 4.5 m high and the facade D fires
+    above it sit at 6-12.5 m: a UAV in front of them is inside the extension's footprint, above its roof.
+    """
+    if len(p) < 3:
+        return list(footprints)
+    return [b for b in footprints if b[4] > p[2] - clearance]
+
+
+def _dist_point_segment(p, a, b) -> float:
+    """Distance in the plane from p to the segment a-b."""
+    ax, ay, bx, by = a[0], a[1], b[0], b[1]
+    dx, dy = bx - ax, by - ay
+    t = ((p[0] - ax) * dx + (p[1] - ay) * dy) / max(dx * dx + dy * dy, 1e-12)
+    t = min(1.0, max(0.0, t))
+    return math.hypot(p[0] - (ax + t * dx), p[1] - (ay + t * dy))
+
+
+def nearest_face(p: Sequence[float], footprints: Sequence[Sequence[float]]) -> tuple:
+    """(outward normal (nx, ny), distance) of the building wall nearest to p in the xy plane.
+
+    Ties (a corner) go to the first face found; (None, inf) without buildings.
+    """
+    best: tuple = (None, math.inf)
+    for b in footprints:
+        x0, y0, x1, y1 = b[:4]
+        for normal, a, c in (((-1.0, 0.0), (x0, y0), (x0, y1)), ((1.0, 0.0), (x1, y0), (x1, y1)),
+                             ((0.0, -1.0), (x0, y0), (x1, y0)), ((0.0, 1.0), (x0, y1), (x1, y1))):
+            d = _dist_point_segment(p, a, c)
+            if d < best[1] - 1e-9:
+                best = (normal, d)
+    return best
+
+
+def in_footprint(p: Sequence[float], footprints: Sequence[Sequence[float]], margin: float = 0.0) -> bool:
+    """True when p (xy) is inside a building footprint grown by margin (shrunk when margin < 0)."""
+    return any(b[0] - margin <= p[0] <= b[2] + margin and b[1] - margin <= p[1] <= b[3] + margin
+               for b in footprints)
+
+
+def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float]]) -> int:
+    """Object SUBTYPE_* of a fire at position, from where it is.
+
+    Rules: more than 0.5 m inside a footprint, under its roof -> INDOOR; lower than 1.5 m and more than 1 m
+    from every wall rising to that height -> GROUND; else (on or near a wall) -> FACADE.
+    """
+    under = standing_at(position, footprints, 0.0)   # nothing is indoors above a roof
+    if in_footprint(position, under, margin=-0.5):
+        return M.SUBTYPE_INDOOR
+    _, d = nearest_face(position, under)
+    if position[2] < 1.5 and d > 1.0:
+        return M.SUBTYPE_GROUND
+    return M.SUBTYPE_FACADE
