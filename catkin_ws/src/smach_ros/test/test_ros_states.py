@@ -169,6 +169,18 @@ class TestMonitorState(unittest.TestCase):
         self.assertFalse(st.preempt_requested())
 
 
+    def test_67_preempt_whose_wake_up_was_lost_still_ends_it(self):
+        # ros/executive_smach#67: a request landing between execute's first check and its clearing of the
+        # wake-up event was lost, and the state blocked until the next message (here: none ever comes)
+        st = smach_ros.MonitorState("silent_topic", Int32, lambda ud, msg: True)
+        t, box = run_async(st, smach.UserData())
+        time.sleep(0.3)
+        smach.State.request_preempt(st)  # the flag without the wake-up: what the race leaves behind
+        t.join(3)
+        self.assertEqual(box.get("o"), "preempted")
+        self.assertFalse(st.preempt_requested())
+
+
 class TestConditionState(unittest.TestCase):
     def test_true_false_and_max_checks(self):
         calls = []

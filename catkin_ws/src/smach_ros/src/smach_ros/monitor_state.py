@@ -45,6 +45,8 @@ class MonitorState(smach.State):
             while not self._trigger_event.wait(0.1):
                 if rospy.is_shutdown():
                     return "preempted"
+                if self.preempt_requested():
+                    break  # its wake-up was cleared above (upstream #67 blocked until the next message)
         finally:
             sub.unregister()
         if self.preempt_requested():
