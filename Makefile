@@ -1,5 +1,7 @@
 # The project's commands. Every target first runs the idempotent setup (apt, venv, catkin_make).
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
+#                  GCS=0 (no web ground station; it is on http://127.0.0.1:8088/ by default)  GCS_PORT=
+#   make replay BAG=results/.../mission.bag   replay a recorded trial on the ground station page  GCS_PORT=
 #   make test      run every test (pytest unit tests + rostest integration tests + the short fault suite)
 #                  PKGS="smach ual_sim"   SKIP_FAULTS=1 (no fault suite)
 #   make bench     run the benchmarks, write bench/results/latest.json
@@ -12,15 +14,23 @@ RTF ?= 4
 RECORD ?= 0
 SUMMARY ?=
 PKGS ?=
+GCS ?= 1
+GCS_PORT ?= 8088
+BAG ?=
 
-.PHONY: setup build mission test test-faults bench lint clean
+.PHONY: setup build mission replay test test-faults bench lint clean
 setup:
 	@bash setup/setup.sh
 
 build: setup
 
 mission: setup
-	@bash tools/run_mission.sh SEED=$(SEED) UAVS=$(UAVS) RTF=$(RTF) RECORD=$(RECORD) SUMMARY=$(SUMMARY)
+	@bash tools/run_mission.sh SEED=$(SEED) UAVS=$(UAVS) RTF=$(RTF) RECORD=$(RECORD) SUMMARY=$(SUMMARY) \
+	  GCS=$(GCS) GCS_PORT=$(GCS_PORT)
+
+replay: setup
+	@[ -n "$(BAG)" ] || { echo "usage: make replay BAG=results/<mission>/mission.bag [GCS_PORT=8088]" >&2; exit 2; }
+	@source env.sh && rosrun mbzirc_ground_station replay "$(BAG)" --port $(GCS_PORT)
 
 test: setup
 	@bash tools/run_tests.sh $(PKGS)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs one simulated Challenge 3 trial (c3_sim.launch) headless and shows its progress in the terminal:
 #   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
+#                        [GCS=1] [GCS_PORT=8088]   (GCS=0: no web ground station)
 # Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
 # mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
 # port so it never clashes with another roscore on this machine.
@@ -34,7 +35,18 @@ setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
   duration:="$DURATION" smach_debug:="$smach_debug" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
+GCS_PID=""
+if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own launch: it never ends the trial)
+  setsid roslaunch --wait mbzirc_launchers ground_station.launch port:="$GCS_PORT" > "$OUT/ground_station.log" 2>&1 &
+  GCS_PID=$!
+fi
+gcs_shown=0
+stop_gcs() {
+  [ -n "$GCS_PID" ] && kill -0 "$GCS_PID" 2>/dev/null && kill -INT "$GCS_PID" 2>/dev/null
+  [ -n "$GCS_PID" ] && { wait "$GCS_PID" 2>/dev/null; GCS_PID=""; }
+}
 stop() {
+  stop_gcs
   if kill -0 "$LAUNCH_PID" 2>/dev/null; then
     kill -INT "$LAUNCH_PID" 2>/dev/null
     for _ in $(seq 1 30); do kill -0 "$LAUNCH_PID" 2>/dev/null || break; sleep 0.5; done
@@ -49,6 +61,10 @@ start=$(date +%s)
 shown=0
 while kill -0 "$LAUNCH_PID" 2>/dev/null; do
   sleep 1
+  if [ -n "$GCS_PID" ] && [ "$gcs_shown" = 0 ]; then
+    gport="$(rosparam get /ground_station/bound_port 2>/dev/null)"
+    [ -n "$gport" ] && { echo "mission: ground station on http://127.0.0.1:$gport/"; gcs_shown=1; }
+  fi
   if [ "$QUIET" != 1 ]; then
     n=$(grep -c '^\[mission\]' "$LOG" 2>/dev/null || true)
     if [ "${n:-0}" -gt "$shown" ]; then grep '^\[mission\]' "$LOG" | tail -n +$((shown + 1)); shown=$n; fi
@@ -58,6 +74,7 @@ while kill -0 "$LAUNCH_PID" 2>/dev/null; do
   fi
 done
 wait "$LAUNCH_PID" 2>/dev/null
+stop_gcs
 [ "$QUIET" != 1 ] && grep '^\[mission\]' "$LOG" | tail -n +$((shown + 1))
 if [ -f "$OUT/summary.json" ]; then
   echo "mission: results in $OUT (summary.json, report.png$( [ "$record" = true ] && echo ', mission.bag'))"
