@@ -462,7 +462,7 @@ class Agent:
         return req
 
     def _take_request(self, timeout: float) -> Optional[Request]:
-        self._wake.wait(timeout)
+        self.backend.wait_event(self._wake, timeout)
         with self._lock:
             req = self._pending
             self._pending = None
@@ -523,7 +523,7 @@ class Agent:
             server.set_aborted(self._make_result(spec, {'message': str(e)}), str(e))
             return
         preempt_sent = False
-        while not req.done.wait(1.0 / C.CONTROL_RATE_HZ):
+        while not self.backend.wait_event(req.done, 1.0 / C.CONTROL_RATE_HZ):
             if not preempt_sent and (server.is_preempt_requested() or self.backend.is_shutdown()):
                 preempt_sent = True
                 with self._lock:

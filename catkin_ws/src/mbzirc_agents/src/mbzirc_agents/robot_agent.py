@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from collections import deque
 from typing import Any, Dict, Optional, Sequence
 
@@ -98,8 +97,8 @@ class RobotAgent(Agent):
         self._went_home = False
         self._home_request = None
         # Why wall time: /clock comes from the simulator on the ground station; when the link is cut the
-        # robot's ROS time stops too, so a ROS-time watchdog would never fire. Injectable for tests.
-        self.wall_clock = time.monotonic
+        # robot's ROS time stops too, so a ROS-time watchdog would never fire.
+        self.wall_clock = backend.wall_time
         self._watchdog_stop = threading.Event()
         self._watchdog_thread: Optional[threading.Thread] = None
         self.parked = False                # a 'parked' region is held while landed
@@ -176,7 +175,7 @@ class RobotAgent(Agent):
     def _watchdog_loop(self) -> None:
         """The watchdog at DATA_FEED_RATE_HZ on the wall clock (a WallTimer: runs when /clock stops)."""
         period = 1.0 / C.DATA_FEED_RATE_HZ
-        while not self._watchdog_stop.wait(period) and not self.backend.is_shutdown():
+        while not self.backend.wait_event(self._watchdog_stop, period) and not self.backend.is_shutdown():
             try:
                 self._watch_heartbeat()
             except Exception as e:             # never let the watchdog thread die

@@ -65,6 +65,14 @@ class RosBackend:
                 return
             time.sleep(min(0.01, max(seconds - (now - start), 0.001)))
 
+    def wall_time(self) -> float:
+        """Monotonic wall-clock seconds (the heartbeat watchdog's clock: it must run when /clock stops)."""
+        return time.monotonic()
+
+    def wait_event(self, event: Any, timeout: float) -> bool:
+        """threading.Event.wait in wall time (the unit tests' fake backend waits on its simulated clock)."""
+        return event.wait(timeout)
+
     def is_shutdown(self) -> bool:
         """rospy.is_shutdown."""
         return rospy.is_shutdown()

@@ -1,13 +1,16 @@
-"""A backend with no ROS: lets the framework run in unit tests (threads, wall time)."""
+"""A backend with no ROS: lets the framework run in unit tests (threads on a simulated clock, see
+sim_clock.py: no test waits in wall time)."""
 import threading
-import time
+
+from sim_clock import SimClock
 
 
 class FakeServer:
     """Stands in for actionlib.SimpleActionServer: send() runs execute_cb in a thread."""
 
-    def __init__(self, name, execute_cb):
+    def __init__(self, name, execute_cb, clock):
         self.name = name
+        self.clock = clock
         self.execute_cb = execute_cb
         self.status = None
         self.result = None
@@ -26,7 +29,8 @@ class FakeServer:
         self.done.set()
 
     def wait(self, timeout=5.0):
-        assert self.done.wait(timeout), f'{self.name} did not finish'
+        """The status once done; fails after `timeout` simulated seconds."""
+        assert self.clock.wait(self.done, timeout), f'{self.name} did not finish in {timeout} s'
         return self.status
 
     def is_preempt_requested(self):
@@ -47,13 +51,14 @@ class FakeServer:
 
 class FakeBackend:
     def __init__(self):
+        self.clock = SimClock()
+        self._shutdown = False
         self.subs = {}
         self.services = {}
         self.servers = {}
         self.pubs = {}
         self.errors = []
         self.infos = []
-        self.shutdown = False
         self.handlers = {}          # service name -> callable(request) for service_proxy
 
     def subscriber(self, topic, msg_type, cb):
@@ -75,7 +80,7 @@ class FakeBackend:
         return call
 
     def action_server(self, name, action, execute_cb):
-        s = FakeServer(name, execute_cb)
+        s = FakeServer(name, execute_cb, self.clock)
         self.servers[name] = s
         return s
 
@@ -83,13 +88,30 @@ class FakeBackend:
         return None
 
     def now(self):
-        return time.monotonic()
+        return self.clock.now()
 
     def sleep(self, s):
-        time.sleep(s)
+        self.clock.sleep(s)
+
+    def wall_time(self):
+        return self.clock.now()
+
+    def wait_event(self, event, timeout):
+        return self.clock.wait(event, timeout)
+
+    @property
+    def shutdown(self):
+        return self._shutdown
+
+    @shutdown.setter
+    def shutdown(self, value):
+        """Ctrl+C: also stops the clock, so that every thread waiting on it wakes and sees it."""
+        self._shutdown = bool(value)
+        if value:
+            self.clock.stop()
 
     def is_shutdown(self):
-        return self.shutdown
+        return self._shutdown
 
     def loginfo(self, m):
         self.infos.append(m)

@@ -1,11 +1,10 @@
 """A kinematic UAV behind the FakeBackend: the UAL services and topics the agents use, sped up.
 
 Why: the tasks' logic (regions, waiting, preemption, goal checks) is tested in a second without ROS;
-the rostests check the same against ual_sim.
+the rostests check the same against ual_sim. It runs on the backend's simulated clock (sim_clock.py).
 """
 import math
 import threading
-import time
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
@@ -82,8 +81,8 @@ class FakeUal:
             self._vel_seen = len(msgs)
             if msgs:
                 t = msgs[-1].twist.linear
-                self.vel, self.vel_time = np.array([t.x, t.y, t.z]), time.monotonic()
-        if self.vel is not None and time.monotonic() - self.vel_time < 0.3:
+                self.vel, self.vel_time = np.array([t.x, t.y, t.z]), self.be.clock.now()
+        if self.vel is not None and self.be.clock.now() - self.vel_time < 0.3:
             return self.vel
         return None
 
@@ -121,7 +120,7 @@ class FakeUal:
                 subs['ual/state'](State(state=state))
             if 'actuators_system/water_level' in subs:
                 subs['actuators_system/water_level'](Float32(data=water))
-            time.sleep(dt)
+            self.be.clock.sleep(dt)
 
 
 def start_uav(backend, params=None, speedup=4.0):
@@ -131,7 +130,7 @@ def start_uav(backend, params=None, speedup=4.0):
     agent = UavAgent('2', backend, {'region_timeout': 5.0, **(params or {})})
     ual = FakeUal(backend, speedup=speedup)
     agent.start()
-    deadline = time.monotonic() + 2
-    while agent.pose is None and time.monotonic() < deadline:
-        time.sleep(0.02)
+    deadline = backend.clock.now() + 2
+    while agent.pose is None and backend.clock.now() < deadline:
+        backend.clock.sleep(0.02)
     return agent, ual

@@ -7,7 +7,6 @@ building (x = 11.4); detections, laser and thermal answers are scripted.
 """
 import math
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -75,7 +74,7 @@ class Scene:
                 a = -math.pi + inc * np.arange(720)
                 r = np.where(np.abs(a) < 1.2, self.wall / np.maximum(np.cos(a), 1e-3), np.inf)
                 subs['scan'](LaserScan(angle_min=-math.pi, angle_increment=inc, ranges=list(r)))
-            time.sleep(0.1)
+            self.be.clock.sleep(0.1)
 
 
 def set_fire(be, position):
@@ -131,7 +130,7 @@ def test_cold_answers_off_the_hole_do_not_count(scene):
 
     def move_hole_once_pumping():
         while not ual.pump and not sc.stop:
-            time.sleep(0.02)
+            be.clock.sleep(0.02)
         ual.speedup = 0.0                          # frozen: it cannot re-centre, no more water flows
         sc.hole = np.array(HOLDER) + np.array([0.0, 0.45, 0.0])
     threading.Thread(target=move_hole_once_pumping, daemon=True).start()
@@ -177,9 +176,9 @@ def test_hole_jump_aborts(scene):
     agent, ual, be, sc = scene
     s = be.servers['extinguish_facade_fire_action']
     s.send(ExtinguishFacadeFireGoal(fire_id=5))
-    deadline = time.monotonic() + 15
-    while not ual.pump and time.monotonic() < deadline:     # locked on the hole and shooting
-        time.sleep(0.05)
+    deadline = be.clock.now() + 15
+    while not ual.pump and be.clock.now() < deadline:     # locked on the hole and shooting
+        be.clock.sleep(0.05)
     assert ual.pump
     sc.hole = np.array(HOLDER) + [0.0, 2.0, 0.0]             # the "hole" is now 2 m to the side
     assert s.wait(10) == 'aborted'
@@ -190,10 +189,10 @@ def test_hole_jump_aborts(scene):
 def lateral_track(ual, server, until):
     """|y - hole y| of the UAV, sampled every 20 ms while the task runs (at most `until` s)."""
     out = []
-    deadline = time.monotonic() + until
-    while not server.done.is_set() and time.monotonic() < deadline:
+    deadline = server.clock.now() + until
+    while not server.done.is_set() and server.clock.now() < deadline:
         out.append(abs(ual.pos[1] - HOLDER[1]))
-        time.sleep(0.02)
+        server.clock.sleep(0.02)
     return out
 
 
@@ -206,9 +205,9 @@ def test_a_decoy_beside_a_lost_hole_does_not_take_the_lock(scene):
     sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
     s = be.servers['extinguish_facade_fire_action']
     s.send(ExtinguishFacadeFireGoal(fire_id=5))
-    deadline = time.monotonic() + 15
-    while not ual.pump and time.monotonic() < deadline:
-        time.sleep(0.02)
+    deadline = be.clock.now() + 15
+    while not ual.pump and be.clock.now() < deadline:
+        be.clock.sleep(0.02)
     assert ual.pump, 'never started shooting'
     sc.circles = [(DECOY_R, 0.0)]
     track = lateral_track(ual, s, 10)
@@ -233,13 +232,13 @@ def test_a_decoy_taken_for_the_hole_is_dropped_for_the_opening(scene):
 
     def openings_after_the_first_lock():
         while not be.infos and not sc.stop:
-            time.sleep(0.02)
-        time.sleep(1.0)                                             # cold answers on the decoy meanwhile
+            be.clock.sleep(0.02)
+        be.clock.sleep(1.0)                                             # cold answers on the decoy meanwhile
         sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0)]
         while not sc.stop:
             if on_hole() and ual.pump:
                 water_on_hole.append(1)
-            time.sleep(0.1)
+            be.clock.sleep(0.1)
     threading.Thread(target=openings_after_the_first_lock, daemon=True).start()
     s, status = extinguish(be, timeout=40)
     assert status == 'succeeded', s.text
@@ -256,16 +255,16 @@ def test_a_fire_never_seen_hot_is_out_only_on_a_hole_seen_through(scene):
     ual.speedup = 1.0
     sc.hot = lambda: False
     sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
-    t0 = time.monotonic()
+    t0 = be.clock.now()
     s, status = extinguish(be, timeout=40)
     assert status == 'succeeded' and s.result.extinguished, s.result.message
     assert ual.water > 0.2 and sc.statuses == [C.STATUS_EXTINGUISHED]
     assert any('never hot' in m for m in be.infos)
-    assert time.monotonic() - t0 > 2 * C.COLD_CHECKS * 0.5
+    assert be.clock.now() - t0 > 2 * C.COLD_CHECKS * 0.5
     sc.statuses.clear()
     ual.water = 2.0
     sc.circles = None                                  # the scripted hole in the arena frame: no depth
-    time.sleep(0.3)                                    # (let it replace the last detection with depth)
+    be.clock.sleep(0.3)                                    # (let it replace the last detection with depth)
     s, status = extinguish(be, timeout=40)
     assert status == 'succeeded' and not s.result.extinguished, s.result.message
     assert ual.water <= 0.1 and sc.statuses == []
@@ -280,12 +279,12 @@ def test_holes_are_placed_with_the_pose_of_their_image(scene):
     sensed = SensedObjects(task)
     ual.goal = (np.array([9.9, 8.5, 6.0]), 0.0)
     while np.linalg.norm(ual.pos - [9.9, 8.5, 6.0]) > 0.01:
-        time.sleep(0.02)
-    then = time.monotonic()
+        be.clock.sleep(0.02)
+    then = be.clock.now()
     pose_then = np.r_[ual.pos, ual.yaw]
     ual.speedup = 1.25                                           # 2 m/s along -y
     ual.goal = (np.array([9.9, 4.0, 6.0]), 0.0)
-    time.sleep(0.4)
+    be.clock.sleep(0.4)
     sensed.on_msg(ObjectDetectionList(objects=[optical_detection(HOLDER, 0.3, pose_then, stamp=then)]))
     (hole,) = sensed.recent_holes(1.0)
     now = agent.position()

@@ -1,6 +1,5 @@
 """Agent framework with a fake backend: dispatch, busy rejection, preemption, sub-tasks, bad goals."""
 import math
-import time
 from types import SimpleNamespace
 
 import pytest
@@ -30,7 +29,7 @@ class Count(AgentTask):
         for i in range(ud.n):
             self.check_preempt()
             self.feedback('COUNTING', f'{i}/{ud.n}')
-            time.sleep(0.02)
+            self.agent.backend.sleep(0.02)
         self.result['value'] = float(ud.n)
         self.result['message'] = f'counted to {ud.n}'
         return C.SUCCESS
@@ -129,7 +128,7 @@ def test_bad_goal_aborted_with_message(agent):
 def test_busy_agent_rejects_other_task(agent):
     s = agent.backend.servers['count_action']
     s.send(goal(50))
-    time.sleep(0.2)
+    agent.backend.clock.sleep(0.2)
     f = agent.backend.servers['fail_action']
     f.send(goal(0))
     assert f.wait() == 'aborted' and 'busy' in f.result.message and 'count' in f.result.message
@@ -140,11 +139,11 @@ def test_busy_agent_rejects_other_task(agent):
 def test_preemption_stops_task_safely_and_agent_recovers(agent):
     s = agent.backend.servers['count_action']
     s.send(goal(500))
-    time.sleep(0.2)
-    t0 = time.monotonic()
+    agent.backend.clock.sleep(0.2)
+    t0 = agent.backend.clock.now()
     s.preempt = True
     assert s.wait() == 'preempted'
-    assert time.monotonic() - t0 < 1.0
+    assert agent.backend.clock.now() - t0 < 1.0
     assert agent.safe_stops == 1
     s.send(goal(2))
     assert s.wait() == 'succeeded'
@@ -155,7 +154,7 @@ def test_sub_tasks_and_their_preemption(agent):
     p.send(goal(3))
     assert p.wait() == 'succeeded' and p.result.value == 6.0
     p.send(goal(500))
-    time.sleep(0.2)
+    agent.backend.clock.sleep(0.2)
     p.preempt = True
     assert p.wait() == 'preempted'
 
@@ -163,7 +162,7 @@ def test_sub_tasks_and_their_preemption(agent):
 def test_agent_preempt_with_reason_aborts(agent):
     s = agent.backend.servers['count_action']
     s.send(goal(500))
-    time.sleep(0.2)
+    agent.backend.clock.sleep(0.2)
     assert agent.preempt_running('central unit heartbeat lost') == 'count'
     assert s.wait() == 'aborted' and 'heartbeat' in s.result.message
 

@@ -1,7 +1,5 @@
 """extinguish_indoor_fire against a fake UAL and a scripted thermal camera: when water flows, when it
 stops, and the top-up of a confirmed fire that reads cold."""
-import time
-
 import pytest
 from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList, TakeOffGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
@@ -34,10 +32,10 @@ class Scene:
     def hot(self):
         """Hot until `hot_until` s of pumping (never seen hot when 0)."""
         if self.ual.pump and self.pumping_since is None:
-            self.pumping_since = time.monotonic()
+            self.pumping_since = self.be.clock.now()
         if self.hot_until <= 0:
             return False
-        return self.pumping_since is None or time.monotonic() - self.pumping_since < self.hot_until
+        return self.pumping_since is None or self.be.clock.now() - self.pumping_since < self.hot_until
 
     def extinguish(self):
         s = self.be.servers['extinguish_indoor_fire_action']

@@ -1,6 +1,5 @@
 """UAV tasks against a fake kinematic UAL (no ROS): take-off, regions, preemption, bad goals."""
 import math
-import time
 
 import numpy as np
 import pytest
@@ -66,7 +65,7 @@ def test_go_to_waits_for_region_of_another_agent(uav):
     assert ual.regions.ask('3', 'hold', (4, -1, 2), (6, 1, 4))[0]      # another UAV on the way
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=pose(10, 0, 3)))
-    time.sleep(1.0)
+    be.clock.sleep(1.0)
     assert any(f.state == 'WAITING_REGION' for f in s.feedback)
     assert np.linalg.norm(ual.pos[:2]) < 0.1                            # did not move
     ual.regions.free('3', 'hold')
@@ -104,12 +103,12 @@ def test_preempted_go_to_stops_the_uav(uav):
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
-    time.sleep(1.0)
+    be.clock.sleep(1.0)
     s.preempt = True
     assert s.wait(5) == 'preempted'
-    time.sleep(0.2)
+    be.clock.sleep(0.2)
     p1 = ual.pos.copy()
-    time.sleep(0.5)
+    be.clock.sleep(0.5)
     assert np.linalg.norm(ual.pos - p1) < 0.05
     assert np.linalg.norm(ual.pos[:2]) > 1.0 and np.linalg.norm(ual.pos[:2] - [-15, 30]) > 5
 
@@ -132,7 +131,7 @@ def test_land_frees_regions(uav):
     s.send(LandGoal())
     assert s.wait(10) == 'succeeded'
     assert ual.state == 1
-    time.sleep(0.5)
+    be.clock.sleep(2.5)                      # idle() asks for the parked box at most every 2 s
     # only the parked box (no other UAV may fly low over a landed one) remains
     assert set(ual.regions.regions()) == {('2', 'parked')}
     lo, hi = ual.regions.regions()[('2', 'parked')]
@@ -155,7 +154,7 @@ def _beating(agent, period=0.1):
     stop = threading.Event()
 
     def loop():
-        while not stop.wait(period):
+        while not agent.backend.clock.wait(stop, period):
             agent._on_heartbeat(None)
     agent._on_heartbeat(None)
     threading.Thread(target=loop, daemon=True).start()
@@ -170,15 +169,15 @@ def test_heartbeat_loss_aborts_task_and_rejects_goals(uav):
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
-    time.sleep(0.2)
+    be.clock.sleep(0.2)
     beat.set()                               # the central unit dies; the agent's own watchdog notices
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
     s.send(GoToGoal(waypoint=pose(0, 0, 3)))
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
     beat = _beating(agent)
-    deadline = time.monotonic() + 2.0        # the agent's 10 Hz wall-clock watchdog sees it
-    while not agent.accepting and time.monotonic() < deadline:
-        time.sleep(0.05)
+    deadline = be.clock.now() + 2.0        # the agent's 10 Hz wall-clock watchdog sees it
+    while not agent.accepting and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
     s.send(GoToGoal(waypoint=pose(0, 0, 3)))
     assert s.wait(10) == 'succeeded'
     beat.set()
@@ -192,19 +191,19 @@ def test_heartbeat_watchdog_runs_on_wall_clock_when_ros_time_stops(uav):
     agent.watchdog.timeout = 0.3
     agent.watchdog.return_home_timeout = 0.5
     homes = []
-    agent.return_home = lambda: homes.append(time.monotonic()) or None
+    agent.return_home = lambda: homes.append(be.clock.now()) or None
     agent._on_heartbeat(None)
     assert agent.accepting
-    deadline = time.monotonic() + 3.0        # no manual timer calls: the agent's own wall-clock watchdog
-    while agent.accepting and time.monotonic() < deadline:
-        time.sleep(0.05)
+    deadline = be.clock.now() + 3.0        # no manual timer calls: the agent's own wall-clock watchdog
+    while agent.accepting and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
     assert not agent.accepting and 'heartbeat' in agent.reject_reason
-    deadline = time.monotonic() + 3.0        # the return_home_timeout countdown runs on wall time too
-    while not homes and time.monotonic() < deadline:
-        time.sleep(0.05)
+    deadline = be.clock.now() + 3.0        # the return_home_timeout countdown runs on wall time too
+    while not homes and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
     assert homes
     agent._on_heartbeat(None)
-    deadline = time.monotonic() + 2.0
-    while not agent.accepting and time.monotonic() < deadline:
-        time.sleep(0.05)
+    deadline = be.clock.now() + 2.0
+    while not agent.accepting and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
     assert agent.accepting
