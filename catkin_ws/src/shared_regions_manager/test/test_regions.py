@@ -1,8 +1,16 @@
 #!/usr/bin/env python3
-"""rostest: /ask_for_region and /free_regions of the region_manager node."""
+"""rostest: /ask_for_region and /free_regions of the region_manager node; its reservations survive a
+kill -9 (respawn + state file); another node cannot free a robot's regions."""
+import os
 import random
+import signal
+import subprocess
 import threading
+import time
 import unittest
+
+import rosgraph
+import rosnode
 
 import rospy
 import rostest
@@ -58,6 +66,34 @@ class TestRegions(unittest.TestCase):
             self.assertTrue(results['a'] or results['b'], f'round {rnd}: none granted')
             for a in ('a', 'b'):
                 self.free(FreeRegionsRequest(agent_id=a, label='race'))
+
+
+    def test_another_node_cannot_free_a_robots_regions(self):
+        self.assertTrue(self.ask(box_req('2', 'go_to', (30, 30, 0), (32, 32, 5))).success)
+        out = subprocess.run(['rosservice', 'call', '/free_regions', "{agent_id: '2', label: '', free_all: true}"],
+                             capture_output=True, text=True, timeout=30).stdout
+        self.assertIn('success: False', out)
+        self.assertFalse(self.ask(box_req('1', 'go_to', (31, 31, 1), (33, 33, 4))).success)
+        self.assertTrue(self.free(FreeRegionsRequest(agent_id='2', free_all=True)).success)   # its owner may
+
+    def test_reservations_survive_kill_9(self):
+        self.assertTrue(self.ask(box_req('3', 'parked', (50, 50, 0), (52, 52, 4))).success)
+        master = rosgraph.Master('/test_regions')
+        pid = rosnode.ServerProxy(rosnode.get_api_uri(master, '/region_manager')).getPid('/test_regions')[2]
+        os.kill(pid, signal.SIGKILL)
+        deadline, new_pid = time.time() + 30.0, None
+        while time.time() < deadline and new_pid in (None, pid):
+            time.sleep(0.3)
+            try:
+                new_pid = rosnode.ServerProxy(rosnode.get_api_uri(master, '/region_manager', skip_cache=True)
+                                              ).getPid('/test_regions')[2]
+            except Exception:
+                new_pid = None
+        self.assertNotIn(new_pid, (None, pid), 'the region manager did not respawn')
+        rospy.wait_for_service('/ask_for_region', 20)
+        self.assertFalse(self.ask(box_req('1', 'go_to', (51, 51, 1), (53, 53, 3))).success,
+                         "the respawned manager forgot robot 3's reservation")
+        self.assertTrue(self.free(FreeRegionsRequest(agent_id='3', free_all=True)).success)
 
 
 if __name__ == '__main__':

@@ -8,26 +8,96 @@ Semantics (as the original `ask_for_region` / `free_regions`):
 - `ask(agent_id, label, box)`: granted when the box overlaps no box owned by *another* agent; a granted
   box replaces the agent's previous box under the same label. Overlapping one's own boxes is allowed.
 - `free(agent_id, label, free_all)`: drops the agent's box under label, or all its boxes.
+
+Rules added because the table is shared by every robot and trusted by all of them (issue 20):
+- **Who may free**: a box is freed only by the node that reserved it, by a node in the agent's own
+  namespace (`/mbzirc2020_<agent_id>/...`: a respawned agent keeps its name), or by a supervisor (the
+  central unit frees the boxes of a crashed robot). `caller=None` (in-process use, tests) is trusted.
+  Nothing else can free another agent's boxes, `free_all` included.
+- **Unknown agents lease their boxes**: an agent id that is not one of the mission's robots
+  (`known_agents`) holds a box only `unknown_lease_s` after its last granted request, so a `ghost`
+  reservation of the whole arena (a stale tool, a test, a typo) blocks the UAVs for at most that long
+  instead of for good. A robot's boxes never expire by time: a robot that went silent is still up there
+  (safety first); the central unit frees them when it declares the robot dead.
+- **Bounded table**: at most `max_labels_per_agent` boxes per agent and `max_agents` agents holding
+  boxes; a request beyond that is refused with the reason (a flood of labels cannot grow memory nor make
+  every request slower without limit).
+- **Persistent** (`to_state` / `load_state`, the node writes them to a state file): a respawned manager
+  keeps every reservation, so two UAVs are never both granted the same airspace across a crash.
 """
 from __future__ import annotations
 
 import math
 import threading
-from typing import Dict, Optional, Tuple
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Dict, Iterable, List, Optional, Tuple
 
 import numpy as np
 
 from mbzirc_agents.geometry import Box, boxes_overlap, make_box
 
+ROBOT_NS = '/mbzirc2020_{}'
+
+
+@dataclass
+class Reservation:
+    """One reserved box and who reserved it."""
+    box: Box
+    caller: str = ''              # node name that asked ('' when unknown)
+    granted_at: float = 0.0       # monotonic (wall) time of the last granted request
+
 
 class RegionManager:
-    """Holds the reserved boxes of every agent; thread-safe (service callbacks run in threads)."""
+    """Holds the reserved boxes of every agent; thread-safe (service callbacks run in threads).
 
-    def __init__(self) -> None:
-        self._regions: Dict[Tuple[str, str], Box] = {}
+    Args:
+        known_agents: agent ids of the mission's robots (None: every agent is a robot, nothing leases).
+        supervisors: node names allowed to free any agent's boxes.
+        unknown_lease_s: seconds an unknown agent holds a box after its last granted request.
+        max_labels_per_agent, max_agents: the table's bounds.
+        clock: monotonic seconds (injectable for tests).
+    """
+
+    def __init__(self, known_agents: Optional[Iterable[str]] = None, supervisors: Iterable[str] = ('/central_unit',),
+                 unknown_lease_s: float = 10.0, max_labels_per_agent: int = 16, max_agents: int = 32,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self._regions: Dict[Tuple[str, str], Reservation] = {}
         self._lock = threading.Lock()
+        self.known = None if known_agents is None else {str(a) for a in known_agents}
+        self.supervisors = set(supervisors)
+        self.lease_s = float(unknown_lease_s)
+        self.max_labels = int(max_labels_per_agent)
+        self.max_agents = int(max_agents)
+        self.clock = clock
+        self.version = 0              # bumped at every change (the node saves when it moved)
 
-    def ask(self, agent_id: str, label: str, min_corner, max_corner) -> Tuple[bool, str]:
+    # ---- rules ------------------------------------------------------------------------------------
+    def is_known(self, agent_id: str) -> bool:
+        return self.known is None or agent_id in self.known
+
+    def may_free(self, caller: Optional[str], agent_id: str, res: Reservation) -> bool:
+        """Whether node `caller` may free `agent_id`'s reservation `res` (see the module docstring)."""
+        if caller is None or caller in self.supervisors:
+            return True
+        if res.caller and caller == res.caller:
+            return True
+        return caller.startswith(ROBOT_NS.format(agent_id) + '/')
+
+    def _expire(self) -> List[Tuple[str, str]]:
+        """Drop the boxes of unknown agents whose lease ran out (call with the lock held)."""
+        now = self.clock()
+        gone = [k for k, r in self._regions.items()
+                if not self.is_known(k[0]) and now - r.granted_at > self.lease_s]
+        for k in gone:
+            del self._regions[k]
+        if gone:
+            self.version += 1
+        return gone
+
+    # ---- requests -----------------------------------------------------------------------------------
+    def ask(self, agent_id: str, label: str, min_corner, max_corner, caller: Optional[str] = None
+            ) -> Tuple[bool, str]:
         """Try to reserve the box; returns (granted, reason in words)."""
         if not agent_id:
             return False, 'empty agent_id'
@@ -36,33 +106,89 @@ class RegionManager:
             return False, 'box has NaN or infinite corners'
         box = make_box(min_corner, max_corner)
         with self._lock:
+            self._expire()
             for (owner, other_label), other in self._regions.items():
-                if owner != agent_id and boxes_overlap(box, other):
+                if owner != agent_id and boxes_overlap(box, other.box):
                     return False, f'overlaps region "{other_label}" of {owner}'
-            self._regions[(agent_id, label)] = box
-        return True, 'granted'
+            key = (agent_id, label)
+            if key not in self._regions:
+                labels = sum(1 for a, _ in self._regions if a == agent_id)
+                if labels >= self.max_labels:
+                    return False, f'agent {agent_id} already holds {labels} regions (max {self.max_labels})'
+                agents = {a for a, _ in self._regions}
+                if agent_id not in agents and len(agents) >= self.max_agents:
+                    return False, f'{len(agents)} agents already hold regions (max {self.max_agents})'
+            self._regions[key] = Reservation(box, caller or '', self.clock())
+            self.version += 1
+        return True, 'granted' if self.is_known(agent_id) else f'granted (unknown agent: {self.lease_s:.0f} s lease)'
 
-    def free(self, agent_id: str, label: str = '', free_all: bool = False) -> bool:
-        """Free one region (or all of the agent's); True when something was freed."""
+    def free(self, agent_id: str, label: str = '', free_all: bool = False, caller: Optional[str] = None
+             ) -> Tuple[bool, str]:
+        """Free one region (or all of the agent's); (True when something was freed, reason in words).
+        Refused as a whole when `caller` may not free one of them."""
         with self._lock:
-            if free_all:
-                keys = [k for k in self._regions if k[0] == agent_id]
-            else:
-                keys = [k for k in self._regions if k == (agent_id, label)]
+            self._expire()
+            keys = [k for k in self._regions if k[0] == agent_id and (free_all or k[1] == label)]
+            denied = [k for k in keys if not self.may_free(caller, agent_id, self._regions[k])]
+            if denied:
+                return False, (f'{caller} may not free the regions of agent {agent_id} '
+                               f'(reserved by {self._regions[denied[0]].caller or "?"})')
             for k in keys:
                 del self._regions[k]
-        return bool(keys)
+            if keys:
+                self.version += 1
+        return bool(keys), f'freed {len(keys)}' if keys else 'nothing to free'
 
+    def expire(self) -> List[Tuple[str, str]]:
+        """Drop the expired leases now (the node calls it periodically); returns what was dropped."""
+        with self._lock:
+            return self._expire()
+
+    # ---- views --------------------------------------------------------------------------------------
     def regions(self) -> Dict[Tuple[str, str], Box]:
         """A copy of every reserved box, keyed by (agent_id, label)."""
         with self._lock:
-            return {k: (v[0].copy(), v[1].copy()) for k, v in self._regions.items()}
+            return {k: (v.box[0].copy(), v.box[1].copy()) for k, v in self._regions.items()}
 
     def owner_at(self, point) -> Optional[str]:
         """The agent whose box contains point, if any (for debugging and tests)."""
         p = np.asarray(point, dtype=float)
         with self._lock:
-            for (owner, _), (lo, hi) in self._regions.items():
+            for (owner, _), r in self._regions.items():
+                lo, hi = r.box
                 if np.all(p >= lo) and np.all(p <= hi):
                     return owner
         return None
+
+    # ---- persistence ----------------------------------------------------------------------------------
+    def to_state(self) -> Dict[str, Any]:
+        """Every reservation as plain JSON-able data (see `load_state`)."""
+        with self._lock:
+            return {'regions': [{'agent': a, 'label': l, 'min': [float(v) for v in r.box[0]],
+                                 'max': [float(v) for v in r.box[1]], 'caller': r.caller}
+                                for (a, l), r in sorted(self._regions.items())]}
+
+    def load_state(self, state: Dict[str, Any]) -> int:
+        """Replace the table with `to_state`'s output (an unknown agent's lease restarts now); ValueError
+        (table unchanged) when anything is malformed or two agents' boxes overlap. Returns the count."""
+        try:
+            table: Dict[Tuple[str, str], Reservation] = {}
+            for d in state['regions']:
+                lo, hi = [float(v) for v in d['min']], [float(v) for v in d['max']]
+                if len(lo) != 3 or len(hi) != 3 or not all(map(math.isfinite, lo + hi)):
+                    raise ValueError(f'region {d.get("agent")}/{d.get("label")}: bad corners')
+                agent, label = str(d['agent']), str(d['label'])
+                if not agent:
+                    raise ValueError('region without agent')
+                table[(agent, label)] = Reservation(make_box(lo, hi), str(d.get('caller') or ''), self.clock())
+        except (KeyError, TypeError) as e:
+            raise ValueError(f'malformed regions state: {type(e).__name__}: {e}') from e
+        items = list(table.items())
+        for i, ((a, la), ra) in enumerate(items):
+            for (b, lb), rb in items[i + 1:]:
+                if a != b and boxes_overlap(ra.box, rb.box):
+                    raise ValueError(f'regions {a}/{la} and {b}/{lb} overlap')
+        with self._lock:
+            self._regions = table
+            self.version += 1
+        return len(table)

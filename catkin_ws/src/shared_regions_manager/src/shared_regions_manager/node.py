@@ -1,48 +1,135 @@
 """ROS adapter of the shared-region manager: serves /ask_for_region and /free_regions.
 
-Optional debug output: `~publish_markers` (false) publishes the reserved boxes as a MarkerArray on
-`regions` at 1 Hz (for rviz).
+Params (defaults): `~robot_ids` ([0, 1, 2, 3]: the mission's agents; any other agent id leases its boxes
+for `~unknown_lease_s`, 10 s wall), `~supervisors` (['/central_unit']: nodes that may free any agent's
+boxes), `~max_labels_per_agent` (16), `~max_agents` (32), `~state_file` ('' = off: the table is written
+there atomically after every change and reloaded by a respawned manager), `~clock_wait` (10 s wall: how
+long a start waits for /clock to judge the file's age), `~publish_markers` (false: the reserved boxes as a
+MarkerArray on `regions` at 1 Hz, for rviz).
 """
 from __future__ import annotations
 
+import json
 import math
+import os
+import threading
+import time
 
 import rospy
 from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionResponse, FreeRegions, FreeRegionsResponse)
+from mbzirc_ros_utils import state_file
+from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .core import RegionManager
+
+FORMAT = 'shared_regions_manager/regions'
+VERSION = 1
+
+
+def caller_of(req) -> str:
+    """The node name that made a service request (rospy's connection header)."""
+    return str((getattr(req, '_connection_header', None) or {}).get('callerid', ''))
 
 
 class RegionManagerNode:
     """Services `ask_for_region` and `free_regions` (relative names: put the node in the root ns)."""
 
     def __init__(self) -> None:
-        self.core = RegionManager()
+        self.core = RegionManager(
+            known_agents=[str(i) for i in rospy.get_param('~robot_ids', [0, 1, 2, 3])],
+            supervisors=rospy.get_param('~supervisors', ['/central_unit']),
+            unknown_lease_s=float(rospy.get_param('~unknown_lease_s', 10.0)),
+            max_labels_per_agent=int(rospy.get_param('~max_labels_per_agent', 16)),
+            max_agents=int(rospy.get_param('~max_agents', 32)))
+        self.state_file = str(rospy.get_param('~state_file', '') or '')
+        self.mission = str(rospy.get_param('/run_id', '') or '') if self.state_file else ''
+        self._save_lock = threading.Lock()
+        self._saved_body = ''
+        if self.state_file:
+            self._resume()
         self.ask_srv = rospy.Service('ask_for_region', AskForRegion, self.on_ask)
         self.free_srv = rospy.Service('free_regions', FreeRegions, self.on_free)
         self.markers = None
         if rospy.get_param('~publish_markers', False):
             from visualization_msgs.msg import MarkerArray
             self.markers = rospy.Publisher('regions', MarkerArray, queue_size=1)
-            self.timer = rospy.Timer(rospy.Duration(1.0), self.publish_markers)
+        self.timer = PeriodicTimer(1.0, self.on_timer, 'region manager')
 
+    # ---- persistence ------------------------------------------------------------------------------
+    def _resume(self) -> None:
+        """Load the reservations of `~state_file` when it is of this mission; else start empty."""
+        now = rospy.get_time()
+        if os.path.exists(self.state_file):
+            deadline = time.monotonic() + float(rospy.get_param('~clock_wait', 10.0))
+            while not rospy.is_shutdown() and rospy.get_time() == 0.0 and time.monotonic() < deadline:
+                time.sleep(0.05)
+            now = rospy.get_time()
+        res = state_file.load(self.state_file, FORMAT, VERSION, self.mission, now, what='regions')
+        if res.kind == state_file.OK:
+            try:
+                n = self.core.load_state(res.state)
+                rospy.loginfo(f'region manager: resumed {n} reservations from {self.state_file} ({res.reason}): '
+                              + ', '.join(f'{a}/{l}' for a, l in sorted(self.core.regions())))
+                return
+            except ValueError as e:
+                rospy.logerr(f'region manager: cannot resume from {self.state_file}: {e}; starting empty')
+                return
+        log = rospy.loginfo if res.kind == state_file.MISSING else rospy.logwarn
+        log(f'region manager: {res.reason}; starting with no reservations')
+
+    def save(self) -> None:
+        """Write the table when it changed (at once: a grant must survive a crash right after it)."""
+        if not self.state_file:
+            return
+        with self._save_lock:
+            state = self.core.to_state()
+            body = json.dumps(state, sort_keys=True)
+            if body == self._saved_body:
+                return
+            try:
+                state_file.save(self.state_file, state_file.encode(state, FORMAT, VERSION, self.mission,
+                                                                   rospy.get_time()))
+                self._saved_body = body
+            except OSError as e:
+                rospy.logerr_throttle(10.0, f'region manager: cannot save to {self.state_file}: {e}')
+
+    # ---- services ---------------------------------------------------------------------------------
     def on_ask(self, req: AskForRegion._request_class) -> AskForRegionResponse:
-        """Grant the box unless it overlaps another agent's box."""
+        """Grant the box unless it overlaps another agent's box (or the table is full)."""
         lo = (req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z)
         hi = (req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z)
         for frame in (req.min_corner.header.frame_id, req.max_corner.header.frame_id):
             if frame not in ('', 'arena'):
                 rospy.logerr_throttle(5.0, f'ask_for_region from {req.agent_id}: frame {frame!r} is not arena')
                 return AskForRegionResponse(success=False)
-        ok, why = self.core.ask(req.agent_id, req.label, lo, hi)
-        if not ok and not all(map(math.isfinite, lo + hi)):
-            rospy.logerr_throttle(5.0, f'ask_for_region from {req.agent_id}: {why}')
+        ok, why = self.core.ask(req.agent_id, req.label, lo, hi, caller=caller_of(req))
+        if not ok and (not all(map(math.isfinite, lo + hi)) or 'max' in why or not req.agent_id):
+            rospy.logerr_throttle(5.0, f'ask_for_region from {req.agent_id!r} ({caller_of(req)}): {why}')
+        elif ok and not self.core.is_known(req.agent_id):
+            rospy.logwarn_throttle(30.0, f'ask_for_region: {req.agent_id!r} ({caller_of(req)}) is not a robot of '
+                                         f'this mission: {why}')
         rospy.logdebug(f'ask_for_region {req.agent_id}/{req.label}: {why}')
+        if ok:
+            self.save()
         return AskForRegionResponse(success=ok)
 
     def on_free(self, req: FreeRegions._request_class) -> FreeRegionsResponse:
-        """Free one box of the agent, or all of them."""
-        return FreeRegionsResponse(success=self.core.free(req.agent_id, req.label, req.free_all))
+        """Free one box of the agent, or all of them, when the caller may."""
+        ok, why = self.core.free(req.agent_id, req.label, req.free_all, caller=caller_of(req))
+        if not ok and 'may not' in why:
+            rospy.logerr_throttle(5.0, f'free_regions refused: {why}')
+        if ok:
+            self.save()
+        return FreeRegionsResponse(success=ok)
+
+    def on_timer(self, _event=None) -> None:
+        """Expire the leases of unknown agents; publish the markers."""
+        gone = self.core.expire()
+        if gone:
+            rospy.logwarn(f'region manager: leases expired: {", ".join(f"{a}/{l}" for a, l in gone)}')
+            self.save()
+        if self.markers is not None:
+            self.publish_markers()
 
     def publish_markers(self, _event=None) -> None:
         """The reserved boxes as translucent cubes (namespace = agent id)."""
