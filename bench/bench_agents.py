@@ -146,7 +146,8 @@ def bench_planner() -> dict:
 def bench_framework() -> dict:
     from types import SimpleNamespace
     from fake_backend import FakeBackend
-    from mbzirc_agents.framework import Agent, AgentTask
+    from mbzirc_agents.agent import Agent
+    from mbzirc_agents.agent_task import AgentTask
 
     class Nop(AgentTask):
         def run(self, ud):

@@ -25,7 +25,8 @@ from uav_abstraction_layer.srv import GoToWaypoint, GoToWaypointRequest
 
 from . import constants as C
 from . import heartbeat as hb
-from .framework import Agent, AgentTask, TaskError, TaskPreempted
+from .agent import Agent
+from .agent_task import AgentTask, TaskError, TaskPreempted
 from .geometry import check_point, quaternion_from_yaw, wrap_angle, yaw_from_quaternion
 
 # Every ~param of an agent with its default (the README lists them).

@@ -8,7 +8,9 @@ import smach  # noqa: F401,E402  (the workspace's smach, pure Python)
 
 from fake_backend import FakeBackend  # noqa: E402
 from mbzirc_agents import constants as C  # noqa: E402
-from mbzirc_agents.framework import Agent, AgentInterface, AgentTask, TaskError  # noqa: E402
+from mbzirc_agents.agent import Agent  # noqa: E402
+from mbzirc_agents.agent_interface import AgentInterface  # noqa: E402
+from mbzirc_agents.agent_task import AgentTask, TaskError  # noqa: E402
 
 
 class Result(SimpleNamespace):
@@ -59,6 +61,14 @@ class Parent(AgentTask):
         return C.SUCCESS
 
 
+class Strict(AgentTask):
+    """Runs sub-task 'fail' as a step it cannot go on without."""
+
+    def run(self, ud):
+        self.call_task_or_raise('fail', {}, 'step 1')
+        return C.SUCCESS
+
+
 def gen_n(goal, agent):
     if not math.isfinite(goal.n) or goal.n < 0:
         raise ValueError(f'n must be a finite number >= 0, got {goal.n}')
@@ -83,6 +93,8 @@ def agent():
     a.add_task('crash', Crash, object(), lambda g, a: {}, Result, Feedback)
     a.add_task('parent', Parent, object(), gen_n, Result, Feedback)
     a.add_sub_task('count', 'parent', Count)
+    a.add_task('strict', Strict, object(), lambda g, a: {}, Result, Feedback)
+    a.add_sub_task('fail', 'strict', Fail)
     a.start()
     yield a
     be.shutdown = True
@@ -94,7 +106,7 @@ def goal(n):
 
 
 def test_state_machine_structure(agent):
-    assert set(agent.sm.get_children()) == {C.DEFAULT_STATE, 'count', 'fail', 'crash', 'parent'}
+    assert set(agent.sm.get_children()) == {C.DEFAULT_STATE, 'count', 'fail', 'crash', 'parent', 'strict'}
 
 
 def test_task_succeeds_with_result_and_feedback(agent):
@@ -117,6 +129,12 @@ def test_error_and_exception_abort_with_message_and_safe_stop(agent):
     s = agent.backend.servers['count_action']         # the agent still works
     s.send(goal(1))
     assert s.wait() == 'succeeded'
+
+
+def test_a_failed_sub_task_step_aborts_with_its_message(agent):
+    s = agent.backend.servers['strict_action']
+    s.send(goal(0))
+    assert s.wait() == 'aborted' and s.result.message == 'step 1: it went wrong'
 
 
 def test_bad_goal_aborted_with_message(agent):

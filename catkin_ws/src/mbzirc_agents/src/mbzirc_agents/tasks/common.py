@@ -59,7 +59,7 @@ def floor_of(z: float) -> int:
 
 def fire_position(agent: Any, fire_id: int) -> Tuple[float, float, float]:
     """Current estimate of a fire's position (TaskError when the fire vanished from the estimator)."""
-    from ..framework import TaskError
+    from ..agent_task import TaskError
     try:
         p = agent.fire(fire_id).pose.pose.position
     except ValueError as e:

@@ -16,7 +16,7 @@ from sensor_msgs.msg import LaserScan
 
 from .. import constants as C
 from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
-from ..framework import AgentTask, TaskError
+from ..agent_task import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall, nearest_face, standing_at
 from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
@@ -78,8 +78,7 @@ class SearchFacade(AgentTask):
         found: list = []
         for i, (pos, yaw, holder) in enumerate(stops):
             self.feedback('GOING', f'holder {i + 1}/{len(stops)}')
-            if self.call_task('go_to', {'waypoint': (pos, yaw)}) != C.SUCCESS:
-                raise TaskError(f'holder {i + 1}: {self.last_sub_result.get("message")}')
+            self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)}, f'holder {i + 1}')
             if holder is None and not faces_wall(pos, yaw, C.BUILDINGS):
                 continue                                 # a transit waypoint (e.g. around a corner)
             self.feedback('CHECKING', f'holder {i + 1}/{len(stops)}: looking with the thermal camera')
@@ -148,8 +147,7 @@ class GoToFacadeFire(AgentTask):
         dist = ud.distance or float(self.agent.p['facade_standoff'])
         pos, yaw = facade_standoff(fire, C.BUILDINGS, dist)
         self.feedback('GOING', f'to fire {ud.fire_id}, {dist:.1f} m in front of it')
-        if self.call_task('go_to', {'waypoint': (pos, yaw)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
         self.result['message'] = f'in front of fire {ud.fire_id}'
         return C.SUCCESS
 
@@ -200,8 +198,7 @@ class ExtinguishFacadeFire(AgentTask):
         ctl = HoleCentering(shoot_distance=float(a.p['shoot_distance']))
         pos, wall_yaw = facade_standoff(fire, C.BUILDINGS, ctl.shoot_distance)
         self.feedback('APPROACHING', f'to {ctl.shoot_distance:.1f} m in front of fire {ud.fire_id}')
-        if self.call_task('go_to', {'waypoint': (pos, wall_yaw)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        self.call_task_or_raise('go_to', {'waypoint': (pos, wall_yaw)})
         try:
             extinguished = self._shoot(ctl, fire, wall_yaw, ud.fire_id)
         finally:

@@ -13,7 +13,7 @@ from std_srvs.srv import Trigger
 
 from .. import constants as C
 from ..control import GroundFireCentering
-from ..framework import AgentTask, TaskError
+from ..agent_task import AgentTask, TaskError
 from ..geometry import column_box, lawnmower, swept_box
 from .common import fire_position, parse_fire, parse_path
 from .sensing import SensedObjects
@@ -100,8 +100,7 @@ class ExtinguishGroundFire(AgentTask):
         self.sensed.clear()
         h = float(a.p['ground_search_height'])
         self.feedback('APPROACHING', f'over fire {ud.fire_id}')
-        if self.call_task('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        self.call_task_or_raise('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)})
         half = float(a.p['hold_half_size'])
         a.reserve(self, 'descend', column_box(fire[0], fire[1], fire[2], fire[2] + h + half, half + 1.0))
         ctl = GroundFireCentering(release_height=float(a.p['blanket_release_height']))

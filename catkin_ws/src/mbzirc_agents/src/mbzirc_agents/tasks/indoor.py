@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from .. import constants as C
-from ..framework import AgentTask, TaskError
+from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
@@ -53,13 +53,11 @@ class EnterBuilding(AgentTask):
     def run(self, ud) -> str:
         (pos, yaw) = ud.entry
         self.feedback('APPROACHING', f'to the window of floor {ud.floor}')
-        if self.call_task('go_to', {'waypoint': (pos, yaw)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
         d = float(self.agent.p['entry_depth'])
         inside = (pos[0] + d * math.cos(yaw), pos[1] + d * math.sin(yaw), pos[2])
         self.feedback('ENTERING', 'flying through the window')
-        if self.call_task('move', {'waypoint': (inside, yaw)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'entering failed'))
+        self.call_task_or_raise('move', {'waypoint': (inside, yaw)})
         self.result['message'] = f'inside floor {ud.floor}'
         return C.SUCCESS
 
@@ -78,8 +76,7 @@ class SearchIndoor(AgentTask):
         found: list = []
         for i, (wp, yaw) in enumerate(path):
             self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
-            if self.call_task('move', {'waypoint': (wp, yaw)}) != C.SUCCESS:
-                raise TaskError(f'waypoint {i + 1}: {self.last_sub_result.get("message")}')
+            self.call_task_or_raise('move', {'waypoint': (wp, yaw)}, f'waypoint {i + 1}')
             found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p['stop_at_first_fire']:
                 break
@@ -139,8 +136,7 @@ class ExtinguishIndoorFire(AgentTask):
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
         pos, yaw = facing_pose(fire, frm, float(a.p['indoor_fire_distance']))
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
-        if self.call_task('move', {'waypoint': (pos, yaw)}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'approach failed'))
+        self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
         self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
         cold = ColdConfirmation()
         if not self._seen_hot(cold, float(a.p['check_fire_time'])):

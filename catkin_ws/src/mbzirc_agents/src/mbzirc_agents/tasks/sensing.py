@@ -14,7 +14,7 @@ from mbzirc_comm_objs.msg import ObjectDetectionList
 
 from .. import constants as C
 from ..control import body_to_world, world_to_body
-from ..framework import AgentTask
+from ..agent_task import AgentTask
 
 CAM_OFFSET_X = 0.15      # base_link -> camera_color_optical_frame (docs/interfaces.md)
 

@@ -13,7 +13,7 @@ from uav_abstraction_layer.srv import Land as LandSrv
 from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOffRequest
 
 from .. import constants as C
-from ..framework import AgentTask, TaskError
+from ..agent_task import AgentTask, TaskError
 from ..geometry import column_box, in_footprint, plan_2d, standing_at, swept_box
 from .common import parse_path, parse_pose
 
@@ -172,8 +172,7 @@ class FollowPath(AgentTask):
     def run(self, ud) -> str:
         for i, wp in enumerate(ud.path):
             self.feedback('FOLLOWING', f'waypoint {i + 1}/{len(ud.path)}')
-            if self.call_task('go_to', {'waypoint': wp}) != C.SUCCESS:
-                raise TaskError(f'waypoint {i + 1}: {self.last_sub_result.get("message")}')
+            self.call_task_or_raise('go_to', {'waypoint': wp}, f'waypoint {i + 1}')
         self.result['message'] = f'followed {len(ud.path)} waypoints'
         return C.SUCCESS
 
@@ -204,13 +203,10 @@ class GoHomeAndRefill(AgentTask):
             z = max(p[2], float(a.p['cruise_altitude']))
             if p[2] < z - 0.2:                    # climb on the spot first: low flight meets parked UAVs
                 self.feedback('CLIMBING', f'climbing to the cruise altitude {z:.1f}')
-                if self.call_task('go_to', {'waypoint': ((p[0], p[1], z), None)}) != C.SUCCESS:
-                    raise TaskError(f'climbing: {self.last_sub_result.get("message")}')
+                self.call_task_or_raise('go_to', {'waypoint': ((p[0], p[1], z), None)}, 'climbing')
             self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
-            if self.call_task('go_to', {'waypoint': ((home[0], home[1], z), None)}) != C.SUCCESS:
-                raise TaskError(f'going home: {self.last_sub_result.get("message")}')
-            if self.call_task('land', {}) != C.SUCCESS:
-                raise TaskError(f'landing: {self.last_sub_result.get("message")}')
+            self.call_task_or_raise('go_to', {'waypoint': ((home[0], home[1], z), None)}, 'going home')
+            self.call_task_or_raise('land', {}, 'landing')
         elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > 1.5:
             raise TaskError('landed away from home: take off first')
         self.feedback('REFILLING', 'waiting for the reset (water / blanket)')

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .. import constants as C
-from ..framework import AgentTask, TaskError
+from ..agent_task import AgentTask, TaskError
 from ..geometry import plan_2d
 from .indoor import SearchIndoor
 
@@ -45,8 +45,7 @@ class UgvSearchIndoor(SearchIndoor):
     def run(self, ud) -> str:
         path = list(ud.path) or self.default_path()
         self.feedback('GOING', 'to the entrance')
-        if self.call_task('go_to', {'waypoint': path[0]}) != C.SUCCESS:
-            raise TaskError(self.last_sub_result.get('message', 'go_to failed'))
+        self.call_task_or_raise('go_to', {'waypoint': path[0]})
         ud_path = path[1:] if len(path) > 1 else path
         return super().run(_UD(ud.floor, ud_path))
 

@@ -1,0 +1,153 @@
+"""AgentInterface: the one owner of an agent's publishers, subscribers, services and clients.
+
+Why (the thesis's design): a task only coordinates components (UAL, actuators, detectors, estimator,
+region manager) through the interface, which routes each message or request to the task that is active
+now. ROS is reached through a *backend* object (`ros_backend.RosBackend`; a fake one in the unit tests).
+"""
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable, Dict, List, Optional
+
+
+class AgentInterface:
+    """Owns the node's publishers, subscribers, service servers and clients.
+
+    A subscriber or service is created once per name; tasks register callbacks on it. A message goes to
+    the callbacks of the tasks active now (a task and the sub-tasks it is running) and to the always-on
+    callbacks (task None). A service request goes to the callback of the innermost active task that
+    registered one, else to the service's default (inactive) callback.
+    """
+
+    def __init__(self, backend: Any) -> None:
+        self.backend = backend
+        self._subs: Dict[str, dict] = {}
+        self._services: Dict[str, dict] = {}
+        self._pubs: Dict[str, Any] = {}
+        self._clients: Dict[str, Any] = {}
+        self._active: List[str] = []          # stack: top-level task, then its running sub-tasks
+        self._demands: Dict[str, list] = {}   # task name -> [(topic, type)] subscribed only while it runs
+        self._demand_subs: Dict[str, list] = {}
+        self._lock = threading.Lock()
+
+    # -- activity
+    def push_active(self, task_name: str) -> None:
+        """A task (or sub-task) starts: its callbacks receive data from now on, its demands open."""
+        with self._lock:
+            self._active.append(task_name)
+            demands = list(self._demands.get(task_name, []))
+        subs = []
+        for topic, msg_type in demands:
+            try:
+                subs.append((topic, self.backend.subscriber(topic, msg_type, lambda _msg: None)))
+            except Exception as e:  # noqa: BLE001 - a producer switched off costs time, not the task
+                self.backend.logerr(f'{task_name}: could not subscribe to {topic}: {e!r}')
+        if subs:
+            with self._lock:
+                self._demand_subs.setdefault(task_name, []).extend(subs)
+
+    def pop_active(self, task_name: str) -> None:
+        """A task ends: its callbacks stop receiving, its demands close."""
+        with self._lock:
+            if task_name in self._active:
+                self._active.remove(task_name)
+            subs = self._demand_subs.pop(task_name, [])
+        for _topic, sub in subs:
+            unregister = getattr(sub, 'unregister', None)
+            if unregister is not None:
+                unregister()
+
+    def add_demand(self, task_name: str, topic: str, msg_type: Any) -> None:
+        """Subscribe to topic only while task_name runs, to switch on a lazy producer.
+
+        Why: a lazy node (circle_detector ~lazy) works only while one of its outputs has a subscriber, and
+        the always-on `sensed_objects` cannot say so (the estimator listens to it all the time). The
+        subscription carries no data to the task; its existence is the request.
+        """
+        with self._lock:
+            self._demands.setdefault(task_name, []).append((topic, msg_type))
+
+    def demanded_topics(self) -> List[str]:
+        """Topics subscribed now because a running task demands them."""
+        with self._lock:
+            return [topic for subs in self._demand_subs.values() for topic, _ in subs]
+
+    def active_tasks(self) -> List[str]:
+        """Names of the active tasks, outermost first."""
+        with self._lock:
+            return list(self._active)
+
+    # -- topics
+    def add_subscriber(self, task_name: Optional[str], topic: str, msg_type: Any,
+                       callback: Callable[[Any], None]) -> None:
+        """Route messages of topic to callback while task_name is active (always when None)."""
+        with self._lock:
+            entry = self._subs.get(topic)
+            if entry is None:
+                entry = {'type': msg_type, 'callbacks': {}}
+                self._subs[topic] = entry
+                create = True
+            else:
+                if entry['type'] is not msg_type:
+                    raise TypeError(f'topic {topic} already subscribed with another type')
+                create = False
+            entry['callbacks'].setdefault(task_name, []).append(callback)
+        if create:
+            self.backend.subscriber(topic, msg_type, lambda msg, t=topic: self._dispatch(t, msg))
+
+    def _dispatch(self, topic: str, msg: Any) -> None:
+        with self._lock:
+            entry = self._subs[topic]
+            names = [None] + list(self._active)
+            callbacks = [cb for n in names for cb in entry['callbacks'].get(n, [])]
+        for cb in callbacks:
+            try:
+                cb(msg)
+            except Exception as e:   # a bad message must not kill the subscriber thread
+                self.backend.logerr_throttle(5.0, f'callback for {topic} failed: {e!r}')
+
+    def add_publisher(self, topic: str, msg_type: Any, latch: bool = False) -> Any:
+        """The (shared) publisher of topic."""
+        with self._lock:
+            if topic not in self._pubs:
+                self._pubs[topic] = self.backend.publisher(topic, msg_type, latch)
+            return self._pubs[topic]
+
+    # -- services
+    def add_service_server(self, task_name: Optional[str], name: str, srv_type: Any,
+                           callback: Optional[Callable[[Any], Any]] = None,
+                           default_callback: Optional[Callable[[Any], Any]] = None) -> None:
+        """Serve name: requests go to task_name's callback while it is active, else to the default."""
+        with self._lock:
+            entry = self._services.get(name)
+            create = entry is None
+            if create:
+                entry = {'type': srv_type, 'callbacks': {}, 'default': None}
+                self._services[name] = entry
+            if callback is not None:
+                entry['callbacks'][task_name] = callback
+            if default_callback is not None:
+                entry['default'] = default_callback
+        if create:
+            self.backend.service(name, srv_type, lambda req, n=name: self._serve(n, req))
+
+    def _serve(self, name: str, req: Any) -> Any:
+        with self._lock:
+            entry = self._services[name]
+            cb = None
+            for n in reversed(self._active):
+                if n in entry['callbacks']:
+                    cb = entry['callbacks'][n]
+                    break
+            if cb is None:
+                cb = entry['callbacks'].get(None) or entry['default']
+        if cb is None:
+            raise RuntimeError(f'service {name}: no active task serves it and no default callback')
+        return cb(req)
+
+    def add_client(self, name: str, srv_type: Any) -> Any:
+        """The (shared) client of service name."""
+        with self._lock:
+            if name not in self._clients:
+                self._clients[name] = self.backend.service_proxy(name, srv_type)
+            return self._clients[name]
