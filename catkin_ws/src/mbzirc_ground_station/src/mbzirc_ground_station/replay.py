@@ -146,6 +146,6 @@ class Replay:
     def frame(self, tracks: bool = False) -> dict:
         with self.lock:
             out = self.state.frame(self.t, tracks=tracks)
-            out["replay"] = {"t": round(self.t, 2), "start": self.source.start, "end": self.source.end,
+            out["replay"] = {"t": self.t, "start": self.source.start, "end": self.source.end,
                              "playing": self.playing, "speed": self.speed}
             return out

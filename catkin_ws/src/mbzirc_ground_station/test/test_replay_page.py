@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""rostest: `replay` of the committed short bag shows, at each time t, the robots where the bag's data_feeds
+put them at t (what the live page showed), scrubbing back and forth and while playing."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+import urllib.request
+
+import rosbag
+import rospkg
+import rostest
+
+from page import StationPage
+
+PKG = rospkg.RosPack().get_path("mbzirc_ground_station")
+BAG = os.path.join(PKG, "test", "data", "short_mission.bag")
+TOL = 0.05   # m: the page's canvas pixels converted back to metres (float pixels, no rounding)
+
+
+def feeds_at(t):
+    """Each robot's last data_feed pose at or before bag time t."""
+    out = {}
+    with rosbag.Bag(BAG) as bag:
+        for topic, msg, mt in bag.read_messages():
+            if mt.to_sec() > t:
+                break
+            if topic.endswith("/data_feed") and msg.pose.header.frame_id:
+                p = msg.pose.pose.position
+                out[topic.split("/")[1].split("_")[1]] = (p.x, p.y)
+    return out
+
+
+class TestReplayPage(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="gcs_replay_")
+        port_file = os.path.join(cls.tmp, "port")
+        cls.proc = subprocess.Popen([sys.executable, os.path.join(PKG, "scripts", "replay"), BAG, "--port", "0",
+                                     "--port-file", port_file])
+        deadline = time.monotonic() + 30
+        while not os.path.exists(port_file) or not open(port_file).read():
+            assert time.monotonic() < deadline, "replay did not start"
+            time.sleep(0.1)
+        cls.base = "http://127.0.0.1:%s" % open(port_file).read()
+        with rosbag.Bag(BAG) as bag:
+            cls.start, cls.end = bag.get_start_time(), bag.get_end_time()
+        cls.page = StationPage(cls.base)
+        cls.page.wait_for(lambda s: s["replay"] is not None, 30, "the replay timeline")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.page.close()
+        cls.proc.terminate()
+        cls.proc.wait(10)
+
+    def control(self, body):
+        req = urllib.request.Request(self.base + "/api/replay", json.dumps(body).encode(),
+                                     {"Content-Type": "application/json"})
+        with urllib.request.urlopen(req, timeout=5) as r:
+            self.assertEqual(json.load(r), {"ok": True})
+
+    def check_positions(self, shown):
+        t = shown["replay"]["t"]
+        truth = feeds_at(t)
+        self.assertTrue(truth, "no data_feed before %.2f" % t)
+        self.assertEqual(sorted(shown["robots"]), sorted(truth))
+        for rid, (x, y) in truth.items():
+            px, py, _ = shown["robots"][rid]
+            self.assertLess(abs(px - x) + abs(py - y), TOL, "robot %s at t=%.2f: page (%.2f, %.2f), bag (%.2f, %.2f)"
+                            % (rid, t, px, py, x, y))
+
+    def test_scrub_shows_the_recorded_positions(self):
+        for dt in (20.0, 5.0, 29.0, 12.5, 12.4):
+            target = round(self.start + dt, 2)
+            self.control({"action": "seek", "t": target})
+            shown = self.page.wait_for(lambda s: s["replay"] and abs(s["replay"]["t"] - target) < 1e-6, 10,
+                                       "t = %.2f" % target)
+            self.check_positions(shown)
+
+    def test_play_moves_the_robots_as_recorded(self):
+        self.control({"action": "seek", "t": self.start + 1.0})
+        self.control({"action": "speed", "speed": 4.0})
+        self.control({"action": "play"})
+        seen = []
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline and len(seen) < 15:
+            shown = self.page.shown()
+            if shown["replay"]["playing"] and shown["replay"]["t"] not in [s["replay"]["t"] for s in seen]:
+                seen.append(shown)
+            time.sleep(0.15)
+        self.control({"action": "pause"})
+        self.assertGreaterEqual(len(seen), 10, "the timeline did not advance while playing")
+        for shown in seen:
+            self.check_positions(shown)
+        moved = max(abs(seen[-1]["robots"][r][0] - seen[0]["robots"][r][0]) +
+                    abs(seen[-1]["robots"][r][1] - seen[0]["robots"][r][1]) for r in seen[0]["robots"])
+        self.assertGreater(moved, 1.0, "no robot moved on the page while playing")
+
+
+if __name__ == "__main__":
+    rostest.rosrun("mbzirc_ground_station", "replay_page", TestReplayPage)
