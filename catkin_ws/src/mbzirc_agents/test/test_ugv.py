@@ -12,7 +12,7 @@ from mbzirc_comm_objs.msg import ObjectList
 from ual_sim.msg import FireStateArray, Score
 
 from mbzirc_agents import constants as C
-from mbzirc_agents.geometry import _segment_hits_rect
+from mbzirc_arena.routing import segment_hits_rect
 
 
 class TestUgv(unittest.TestCase):
@@ -54,7 +54,7 @@ class TestUgv(unittest.TestCase):
         outside = [p for p in self.trace if p[1] < 6.0]
         for a, b in zip(outside[:-1], outside[1:]):
             for bld in C.BUILDINGS:
-                self.assertFalse(_segment_hits_rect(a, b, bld[:4]))
+                self.assertFalse(segment_hits_rect(a, b, bld[:4]))
 
     def test_3_found_the_indoor_fire(self):
         """The ground-floor fire found by search_indoor is the active one (ground truth /sim/fires)."""

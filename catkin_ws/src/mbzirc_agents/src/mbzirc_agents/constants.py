@@ -1,7 +1,8 @@
-"""Constants of the agents, in one place (outcomes, names, world defaults).
+"""Constants of the agents, in one place (outcomes, names, defaults).
 
-Why one module: task outcomes, state names and the default world layout are shared by the framework,
-the tasks, the nodes and the tests; string literals spread around drift apart.
+Why one module: task outcomes, state names and defaults are shared by the framework, the tasks, the nodes
+and the tests; string literals spread around drift apart. The arena and the message constants come from
+mbzirc_arena (re-exported below), never copied here.
 """
 from __future__ import annotations
 
@@ -16,59 +17,32 @@ DEFAULT_STATE = 'DEFAULT'
 SM_END = 'end'              # the machine's only outcome: the node is shutting down
 SHUTDOWN_OUTCOME = 'shutdown'
 
-# ---- status of estimated objects (mbzirc_comm_objs/Object STATUS_*, same values as SetObjectStatus) --
-STATUS_INACTIVE = 0
-STATUS_ACTIVE = 1
-STATUS_DETECTED = 2
-STATUS_LOST = 3
-STATUS_EXTINGUISHED = 4
-STATUS_NAMES = {STATUS_INACTIVE: 'INACTIVE', STATUS_ACTIVE: 'ACTIVE', STATUS_DETECTED: 'DETECTED',
-                STATUS_LOST: 'LOST', STATUS_EXTINGUISHED: 'EXTINGUISHED'}
+# ---- messages and the arena: named once in mbzirc_arena, re-exported for the tasks ----------------------
+from mbzirc_arena import c3 as _arena  # noqa: E402
+from mbzirc_arena.messages import (  # noqa: E402,F401
+    CAMERA_DIRECTION_DOWNWARD as CAMERA_DOWNWARD, CAMERA_DIRECTION_FORWARD as CAMERA_FORWARD, GLOBAL_FRAME,
+    STATUS_ACTIVE, STATUS_DETECTED, STATUS_EXTINGUISHED, STATUS_INACTIVE, STATUS_LOST, STATUS_NAMES,
+    SUBTYPE_FACADE, SUBTYPE_GROUND, SUBTYPE_INDOOR, SUBTYPE_UNKNOWN, TYPE_FIRE, TYPE_HOLE, UAL_FLYING,
+    UAL_FLYING_AUTO, UAL_FLYING_MANUAL, UAL_LANDED_ARMED, UAL_LANDED_DISARMED, UAL_LANDING, UAL_TAKING_OFF,
+    UAL_UNINITIALIZED)
 
-# ObjectDetection TYPE_* and Object SUBTYPE_* we use.
-TYPE_FIRE = 8
-TYPE_HOLE = 9
-SUBTYPE_UNKNOWN = 0
-SUBTYPE_FACADE = 1
-SUBTYPE_GROUND = 2
-SUBTYPE_INDOOR = 3
+ARENA_BOX = _arena.BOUNDS             # (x_min, y_min, z_min, x_max, y_max, z_max)
+TOWER = _arena.TOWER                  # footprints (x_min, y_min, x_max, y_max, top)
+EXTENSION = _arena.EXTENSION
+BUILDINGS = list(_arena.FOOTPRINTS)
+FACADE_HOLDERS = list(_arena.FACADE_HOLDERS)
 
-# ThermalImage camera_direction
-CAMERA_FORWARD = 1
-CAMERA_DOWNWARD = 2
-
-# ---- uav_abstraction_layer/State --------------------------------------------------------------------
-UAL_UNINITIALIZED = 0
-UAL_LANDED_DISARMED = 1
-UAL_LANDED_ARMED = 2
-UAL_TAKING_OFF = 3
-UAL_FLYING_AUTO = 4
-UAL_FLYING_MANUAL = 5
-UAL_LANDING = 6
-
-# ---- world (c3_world.md); every one of these is also a ~param of the nodes that use it ---------------
-GLOBAL_FRAME = 'arena'
-# Arena box (x_min, y_min, z_min, x_max, y_max, z_max): 60 m x 50 m x 20 m (ual_sim c3_default world).
-ARENA_BOX = (-17.0, -13.0, 0.0, 43.0, 37.0, 20.0)
-# Building footprints (x_min, y_min, x_max, y_max, height).
-TOWER = (11.4, 6.7, 24.2, 19.5, 18.0)
-EXTENSION = (24.2, 6.7, 37.0, 19.5, 4.5)
-BUILDINGS = [TOWER, EXTENSION]
-# Floors: z range of each floor (0 ground, 1 first, 2 second); a fire's floor is the range holding its z.
-FLOOR_Z = [(0.0, 5.0), (5.0, 10.0), (10.0, 15.0)]
-FACADE_HOLDERS = [
-    (12.4, 19.5, 6.5), (12.4, 19.5, 12.75), (17.4, 19.5, 10.5), (22.7, 19.5, 12.75), (23.7, 19.5, 0.75),
-    (11.4, 8.5, 6.0), (11.4, 18.5, 2.75), (11.4, 18.5, 10.25), (11.4, 14.5, 10.5), (11.4, 8.5, 12.5),
-    (24.2, 17.75, 6.0), (24.2, 12.7, 10.5), (24.2, 8.2, 12.5), (24.2, 18.8, 12.5), (24.2, 8.2, 8.25),
-]
-OUTDOOR_FIRE_HOLDERS = [(-9.0, 20.0, 0.0), (1.0, 14.0, 0.0)]
-# Default outdoor area searched for ground fires (x_min, y_min, x_max, y_max): around the holders.
+# ---- agent defaults of the default arena (each is also a ~param of the nodes that use it) ------------------
+# Default outdoor area searched for ground fires (x_min, y_min, x_max, y_max): around the ground fire places.
 GROUND_SEARCH_AREA = (-12.0, 6.0, 7.0, 30.0)
-# UGV: the ground-floor door (facade B, x 13-15.5 at y = 6.7), a pose outside it and a search path inside.
-UGV_DOOR_OUTSIDE = (14.25, 4.0)
-UGV_DOOR_INSIDE = (14.25, 9.0)
-# Viewpoints (x, y, yaw) ~5 m from the ground-floor indoor holders (17.7, 8.5) and (17.9, 16.5): the UGV's
-# level thermal camera (at ground height in ual_sim) only sees a fire 1.5 m up from about 5 m away.
+# UGV: a pose outside the ground-floor door of facade B and one inside it (the door's centre +- along its
+# normal), and a search path inside.
+_DOOR_B = next(d for d in _arena.ARENA.doors('tower') if d.wall == 'facade_B')
+UGV_DOOR_OUTSIDE = (_DOOR_B.centre[0] + 2.7 * _DOOR_B.normal[0], _DOOR_B.centre[1] + 2.7 * _DOOR_B.normal[1])
+UGV_DOOR_INSIDE = (_DOOR_B.centre[0] - 2.3 * _DOOR_B.normal[0], _DOOR_B.centre[1] - 2.3 * _DOOR_B.normal[1])
+# Viewpoints (x, y, yaw) ~5 m from where the ground-floor indoor fires were in the simulated world: private
+# knowledge (docs/arena_knowledge.md), to be replaced by exploration (issue 18). The UGV's level thermal
+# camera only sees a fire 1.5 m up from about 5 m away.
 UGV_INDOOR_PATH = [(12.4, 8.5, 0.0), (16.5, 11.0, 0.0), (19.5, 11.0, 0.0), (23.0, 16.5, 3.14159)]
 
 # ---- agent defaults ---------------------------------------------------------------------------------

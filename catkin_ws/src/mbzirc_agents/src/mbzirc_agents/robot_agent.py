@@ -19,6 +19,8 @@ from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, CheckFire, 
                                   FreeRegionsRequest, GetCostToGoTo, GetCostToGoToResponse, SetObjectStatus,
                                   SetObjectStatusRequest)
 from std_msgs.msg import Bool, Float32, Header
+from mbzirc_arena.boxes import check_point
+from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
 from std_srvs.srv import Trigger
 from uav_abstraction_layer.msg import State
 from uav_abstraction_layer.srv import GoToWaypoint, GoToWaypointRequest
@@ -27,7 +29,6 @@ from . import constants as C
 from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
-from .geometry import check_point, quaternion_from_yaw, wrap_angle, yaw_from_quaternion
 
 # Every ~param of an agent with its default (the README lists them).
 DEFAULT_PARAMS: Dict[str, Any] = {

@@ -5,6 +5,7 @@ from typing import Any, Dict
 
 from mbzirc_comm_objs import msg as M
 
+from . import constants as C
 from .robot_agent import RobotAgent
 from .tasks import facade as F, ground as G, indoor, uav_motion as U
 
@@ -50,7 +51,7 @@ class UavAgent(RobotAgent):
 
     def return_home(self) -> Any:
         """After a long heartbeat loss: go home and land (and take the reset if it comes)."""
-        if self.ual_state not in (4, 5):     # not flying: stay where we are
+        if self.ual_state not in C.UAL_FLYING:     # not flying: stay where we are
             return None
         try:
             return self.submit('go_home_and_refill', {}, force=True)

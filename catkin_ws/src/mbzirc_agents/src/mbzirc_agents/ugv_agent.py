@@ -3,8 +3,9 @@ from __future__ import annotations
 
 from typing import Any, Dict
 
+from mbzirc_arena.routing import path_length, plan_2d
+
 from . import constants as C
-from .geometry import plan_2d, path_length
 from .robot_agent import RobotAgent
 from .tasks import indoor, ugv, uav_motion as U
 from .uav_agent import register_tasks

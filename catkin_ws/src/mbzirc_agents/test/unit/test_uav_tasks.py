@@ -81,7 +81,7 @@ def test_go_to_around_the_building_never_crosses_it(uav):
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=pose(30, 24, 3)))     # beyond the tower's far corner
     assert s.wait(20) == 'succeeded'
-    from mbzirc_agents.geometry import _segment_hits_rect
+    from mbzirc_arena.routing import segment_hits_rect as _segment_hits_rect
     pts = [np.zeros(2)] + [w[0][:2] for w in ual.waypoints]
     assert len(pts) > 2
     for a, b in zip(pts[:-1], pts[1:]):

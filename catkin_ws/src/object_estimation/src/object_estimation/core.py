@@ -28,8 +28,9 @@ from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from mbzirc_agents import constants as C
-from mbzirc_agents.geometry import in_footprint, nearest_face, standing_at
+from mbzirc_arena import c3
+from mbzirc_arena import messages as C
+from mbzirc_arena.buildings import classify_fire  # noqa: F401  (the arena's rule; re-exported for the tests)
 
 STICKY = (C.STATUS_INACTIVE, C.STATUS_EXTINGUISHED)
 
@@ -60,17 +61,6 @@ class Track:
     sub_type: int = C.SUBTYPE_UNKNOWN
     scale: tuple = (0.0, 0.0, 0.0)
     agents: set = field(default_factory=set)
-
-
-def classify_fire(position: Sequence[float], buildings: Sequence[Sequence[float]]) -> int:
-    """SUBTYPE_* of a fire at position: inside a footprint -> INDOOR, low and away from walls -> GROUND."""
-    buildings = standing_at(position, buildings, 0.0)   # nothing is indoors above a roof
-    if in_footprint(position, buildings, margin=-0.5):
-        return C.SUBTYPE_INDOOR
-    _, d = nearest_face(position, buildings)
-    if position[2] < 1.5 and d > 1.0:
-        return C.SUBTYPE_GROUND
-    return C.SUBTYPE_FACADE
 
 
 def floor_covariance(cov: np.ndarray, min_var: float) -> np.ndarray:
@@ -113,7 +103,7 @@ class ObjectEstimator:
     def __init__(self, gates: Optional[Dict[int, float]] = None, default_gate: float = 2.0,
                  min_updates: int = 5, lost_time: float = 10.0,
                  default_covariance: Sequence[float] = (1.5, 1.5, 0.5), process_noise: float = 1e-3,
-                 buildings: Sequence[Sequence[float]] = tuple(C.BUILDINGS), chi2_gate: float = 16.27,
+                 buildings: Sequence[Sequence[float]] = c3.FOOTPRINTS, chi2_gate: float = 16.27,
                  merge_distances: Optional[Dict[int, float]] = None, min_std: float = 0.4) -> None:
         self.min_var = float(min_std) ** 2
         self.merge_distances = dict(merge_distances or {C.TYPE_FIRE: 1.5, C.TYPE_HOLE: 0.15})

@@ -24,7 +24,7 @@ import rospy
 from mbzirc_comm_objs.msg import Object, ObjectDetectionList, ObjectList
 from mbzirc_comm_objs.srv import SetObjectStatus, SetObjectStatusResponse
 
-from mbzirc_agents import constants as C
+from mbzirc_arena import messages as C
 from . import store
 from .core import Detection, ObjectEstimator
 
@@ -186,7 +186,7 @@ class EstimatorNode:
                 o.pose.covariance = [float(v) if math.isfinite(v) else 0.0 for v in cov.flatten()]
                 o.scale.x, o.scale.y, o.scale.z = t.scale
                 o.type, o.sub_type, o.id, o.status = t.type, t.sub_type, t.id, t.status
-                o.color = 6 if t.type == C.TYPE_FIRE else 0
+                o.color = C.COLOR_FIRE if t.type == C.TYPE_FIRE else C.COLOR_UNKNOWN
                 o.num_updates = min(t.num_updates, 65535)
                 o.last_update = rospy.Time.from_sec(max(t.last_update, 0.0))
                 msg.objects.append(o)

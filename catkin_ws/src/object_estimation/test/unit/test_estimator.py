@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from mbzirc_agents import constants as C
-from object_estimation.core import Detection, ObjectEstimator, classify_fire
+from mbzirc_arena import messages as C
+from object_estimation.core import Detection, ObjectEstimator
 
 
 def det(p, t=0.0, agent='1', typ=C.TYPE_FIRE, cov=None):
@@ -76,16 +76,6 @@ def test_bad_covariance_replaced_and_nan_rejected():
     assert np.all(np.isfinite(t.covariance))
     with pytest.raises(ValueError):
         est.add(det((np.nan, 0, 0)))
-
-
-def test_classify_fire():
-    assert classify_fire((1, 14, 0), C.BUILDINGS) == C.SUBTYPE_GROUND
-    assert classify_fire((12.4, 19.5, 6.5), C.BUILDINGS) == C.SUBTYPE_FACADE
-    assert classify_fire((23.7, 19.5, 0.75), C.BUILDINGS) == C.SUBTYPE_FACADE
-    assert classify_fire((16, 12, 1.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
-    # 0.8 m out from facade D, above the one-storey extension: a facade fire, not one inside the extension
-    assert classify_fire((25.0, 18.8, 12.5), C.BUILDINGS) == C.SUBTYPE_FACADE
-    assert classify_fire((30.0, 12.0, 2.0), C.BUILDINGS) == C.SUBTYPE_INDOOR
 
 
 def test_noise_tails_do_not_start_duplicate_tracks():

@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from mbzirc_agents import constants as C
+from mbzirc_arena import messages as C
 from object_estimation import store
 from object_estimation.core import Detection, ObjectEstimator
 

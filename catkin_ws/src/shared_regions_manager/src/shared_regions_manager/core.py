@@ -35,7 +35,7 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Tuple
 
 import numpy as np
 
-from mbzirc_agents.geometry import Box, boxes_overlap, make_box
+from mbzirc_arena.boxes import Box, boxes_overlap, make_box
 
 ROBOT_NS = '/mbzirc2020_{}'
 

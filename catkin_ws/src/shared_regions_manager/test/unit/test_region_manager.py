@@ -2,7 +2,7 @@
 import random
 import threading
 
-from mbzirc_agents.geometry import boxes_overlap
+from mbzirc_arena.boxes import boxes_overlap
 from mbzirc_ros_utils import state_file
 from shared_regions_manager.core import RegionManager
 

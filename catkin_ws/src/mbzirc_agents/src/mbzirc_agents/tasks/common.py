@@ -4,8 +4,10 @@ from __future__ import annotations
 import math
 from typing import Any, Optional, Tuple
 
+from mbzirc_arena.c3 import floor_of  # noqa: F401  (the tasks' floor rule is the arena's)
+from mbzirc_arena.yaw import yaw_from_quaternion
+
 from .. import constants as C
-from ..geometry import yaw_from_quaternion
 
 
 def parse_pose(ps: Any, agent: Any, what: str = 'waypoint', check: bool = True
@@ -47,14 +49,6 @@ def parse_fire(fire_id: int, agent: Any, sub_types: Tuple[int, ...] = ()) -> int
         raise ValueError(f'fire {fire_id} is a {names.get(obj.sub_type, obj.sub_type)} fire, '
                          f'not {"/".join(names[s] for s in sub_types)}')
     return int(fire_id)
-
-
-def floor_of(z: float) -> int:
-    """Floor index of a height (constants.FLOOR_Z); -1 when above the building."""
-    for i, (z0, z1) in enumerate(C.FLOOR_Z):
-        if z0 <= z < z1:
-            return i
-    return -1
 
 
 def fire_position(agent: Any, fire_id: int) -> Tuple[float, float, float]:

@@ -13,11 +13,12 @@ import numpy as np
 from circle_detector import hole_choice
 from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import LaserScan
+from mbzirc_arena.buildings import nearest_face, standing_at
 
 from .. import constants as C
 from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
 from ..agent_task import AgentTask, TaskError
-from ..geometry import facade_standoff, faces_wall, nearest_face, standing_at
+from ..geometry import facade_standoff, faces_wall
 from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects

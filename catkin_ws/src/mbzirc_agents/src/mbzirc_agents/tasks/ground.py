@@ -10,11 +10,12 @@ import math
 
 import numpy as np
 from std_srvs.srv import Trigger
+from mbzirc_arena.boxes import column_box, swept_box
 
 from .. import constants as C
 from ..control import GroundFireCentering
 from ..agent_task import AgentTask, TaskError
-from ..geometry import column_box, lawnmower, swept_box
+from ..geometry import lawnmower
 from .common import fire_position, parse_fire, parse_path
 from .sensing import SensedObjects
 from .uav_motion import hold_box

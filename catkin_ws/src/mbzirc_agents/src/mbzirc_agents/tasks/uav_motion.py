@@ -11,14 +11,16 @@ import math
 import numpy as np
 from uav_abstraction_layer.srv import Land as LandSrv
 from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOffRequest
+from mbzirc_arena.boxes import column_box, swept_box
+from mbzirc_arena.buildings import in_footprint, standing_at
+from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
-from ..geometry import column_box, in_footprint, plan_2d, standing_at, swept_box
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
-FLYING = (C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL)
+FLYING = C.UAL_FLYING
 
 
 def gen_take_off(goal, agent) -> dict:

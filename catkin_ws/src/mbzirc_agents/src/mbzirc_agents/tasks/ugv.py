@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import math
 
+from mbzirc_arena.routing import plan_2d
+
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
-from ..geometry import plan_2d
 from .indoor import SearchIndoor
 
 
