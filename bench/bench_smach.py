@@ -7,9 +7,16 @@ Figures (all measured in this run):
 * mean time of one Concurrence run with 4 instant children (thread start and join cost);
 * time to encode a 100-key userdata as introspection local_data, and to decode it with the safe unpickler.
 Writes bench/results/smach.json.
+
+``--against REV``: transitions/s of this tree's smach and of the smach of git revision REV, measured side by
+side (alternating processes, best of 3 runs each, 8 rounds), and their ratio (no result file written).
 """
 import json
+import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 
 import smach
@@ -97,7 +104,40 @@ def bench_codec(reps=300):
             "unsafe_decode_us": 1e6 * t_unsafe, "safe_over_unsafe_ratio": t_safe / max(t_unsafe, 1e-12)}
 
 
+def transitions_per_s_of(smach_src, runs=3):
+    """Best of ``runs`` loops, in a fresh process that imports smach from ``smach_src``."""
+    env = dict(os.environ, PYTHONPATH=smach_src + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, __file__, "--transitions-only", str(runs)], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return float(out.split()[-1])
+
+
+def compare_against(rev, rounds=8):
+    here = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "catkin_ws", "src", "smach",
+                        "src")
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(["git", "-C", here, "archive", rev, "."], check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        ours, theirs = [], []
+        for _ in range(rounds):
+            theirs.append(transitions_per_s_of(tmp))
+            ours.append(transitions_per_s_of(here))
+    print(json.dumps({"against": rev, "rounds": rounds, "ours_best": max(ours), "theirs_best": max(theirs),
+                      "ratio_best": max(ours) / max(theirs),
+                      "ratio_median": statistics.median(ours) / statistics.median(theirs),
+                      "load_average_1min": os.getloadavg()[0]}, indent=2))
+
+
 def main():
+    if "--transitions-only" in sys.argv:
+        quiet()
+        runs = int(sys.argv[-1])
+        assert os.path.dirname(smach.__file__).startswith(os.environ["PYTHONPATH"].split(os.pathsep)[0])
+        print(max(bench_transitions()["transitions_per_s"] for _ in range(runs)))
+        return
+    if "--against" in sys.argv:
+        compare_against(sys.argv[sys.argv.index("--against") + 1])
+        return
     quiet()
     out = {"transitions": bench_transitions(), "concurrence": bench_concurrence(), "codec": bench_codec()}
     print(json.dumps(out, indent=2))
