@@ -78,16 +78,22 @@ def _concurrence_preempted_by_its_last_child(outcomes):
     return cc, holder
 
 
-def test_53_late_preempt_of_concurrence_reaches_the_next_state():
-    """ros/executive_smach#53: the Concurrence claimed the preempt was serviced though no child saw it,
-    so the next state of the sequence ran as if nothing happened."""
-    cc, holder = _concurrence_preempted_by_its_last_child(["done"])  # it cannot say 'preempted'
-    nxt = Blocker()
+def _sequence_of(cc, holder, nxt):
+    """Sequence CC -> NEXT, which the Concurrence's last child preempts."""
     sq = smach.Sequence(outcomes=["done", "preempted"], connector_outcome="done")
     holder["parent"] = sq
     with sq:
         smach.Sequence.add("CC", cc)
         smach.Sequence.add("NEXT", nxt)
+    return sq
+
+
+def test_53_late_preempt_of_concurrence_reaches_the_next_state():
+    """ros/executive_smach#53: the Concurrence claimed the preempt was serviced though no child saw it,
+    so the next state of the sequence ran as if nothing happened."""
+    cc, holder = _concurrence_preempted_by_its_last_child(["done"])  # it cannot say 'preempted'
+    nxt = Blocker()
+    sq = _sequence_of(cc, holder, nxt)
     assert sq.execute() == "preempted"
     assert nxt.saw_preempt_at_start == [True]
     assert not sq.preempt_requested() and not cc.preempt_requested()
@@ -96,11 +102,7 @@ def test_53_late_preempt_of_concurrence_reaches_the_next_state():
 def test_53_late_preempt_of_concurrence_with_a_preempted_outcome_returns_it():
     cc, holder = _concurrence_preempted_by_its_last_child(["done", "preempted"])
     nxt = Const("done")
-    sq = smach.Sequence(outcomes=["done", "preempted"], connector_outcome="done")
-    holder["parent"] = sq
-    with sq:
-        smach.Sequence.add("CC", cc)
-        smach.Sequence.add("NEXT", nxt)
+    sq = _sequence_of(cc, holder, nxt)
     assert sq.execute() == "preempted"
     assert nxt.runs == 0
     assert not sq.preempt_requested() and not cc.preempt_requested()

@@ -49,10 +49,16 @@ class CopyAToB(smach.State):
             self.linger.set()
 
 
-def holds(key):
-    """A state that checks the machine it runs in can read ``key`` (upstream's ConditionState asserter)."""
-    return smach.CBState(lambda ud: "true" if key in ud else "false", outcomes=["true", "false"],
-                         input_keys=[key])
+def machine_that_needs(key):
+    """A nested machine with input key ``key`` whose only state checks it can read it ('done'), else
+    'aborted' (upstream's ConditionState asserter)."""
+    inner = smach.StateMachine(outcomes=["done", "aborted"])
+    inner.register_input_keys([key])
+    with inner:
+        smach.StateMachine.add("ASSERTER", smach.CBState(lambda ud: "true" if key in ud else "false",
+                                                         outcomes=["true", "false"], input_keys=[key]),
+                               {"true": "done", "false": "aborted"})
+    return inner
 
 
 # ---- state_machine ---------------------------------------------------------------------------------------
@@ -70,11 +76,7 @@ def test_nested_machine_reads_its_input_keys_from_the_parent():
     with sm:
         smach.StateMachine.add("SETTER", WriteA(), {"done": "GETTER"})
         smach.StateMachine.add("GETTER", CopyAToB(), {"done": "NEST"})
-        inner = smach.StateMachine(outcomes=["done", "aborted"])
-        inner.register_input_keys(["a"])
-        with inner:
-            smach.StateMachine.add("ASSERTER", holds("a"), {"true": "done", "false": "aborted"})
-        smach.StateMachine.add("NEST", inner)
+        smach.StateMachine.add("NEST", machine_that_needs("a"))
     assert sm.execute() == "done"
     assert (sm.userdata.a, sm.userdata.b) == ("A", "A")
 
@@ -84,11 +86,7 @@ def test_userdata_set_on_the_machine_before_it_runs_reaches_nested_machines():
     sm.userdata.foo = 1
     with sm:
         smach.StateMachine.add("SETTER", WriteA(), {"done": "NEST"})
-        inner = smach.StateMachine(outcomes=["done", "aborted"])
-        inner.register_input_keys(["foo"])
-        with inner:
-            smach.StateMachine.add("ASSERTER", holds("foo"), {"true": "done", "false": "aborted"})
-        smach.StateMachine.add("NEST", inner)
+        smach.StateMachine.add("NEST", machine_that_needs("foo"))
     assert sm.execute() == "done"
     assert sm.userdata.foo == 1
 
