@@ -16,7 +16,7 @@ SHOWN_JS = """JSON.stringify({
   frames: window.gcs.frames, t: window.gcs.frame ? window.gcs.frame.t : null,
   replay: window.gcs.frame ? window.gcs.frame.replay || null : null,
   robots: Object.fromEntries(Object.entries(window.gcs.drawn.robots).map(
-    ([k, v]) => [k, window.gcs.toWorld(v.px, v.py).concat([v.stale])])),
+    ([k, v]) => [k, window.gcs.toWorld(v.px, v.py).concat([v.stale, v.stamp])])),
   fires: Object.fromEntries(Array.from(document.querySelectorAll('#fires .fire')).map(
     (e) => [e.dataset.fire, e.querySelector('.fstatus').textContent])),
   conn: document.getElementById('conn').textContent})"""

@@ -205,7 +205,9 @@ class GroundStationState:
         if xyz is None or yaw is None:
             rv.pose = None
         else:
-            rv.pose = {"x": round(xyz[0], 3), "y": round(xyz[1], 3), "z": round(xyz[2], 3), "yaw": round(yaw, 3)}
+            stamp = finite(pose.header.stamp.to_sec())   # when the robot was there (its UAL pose's time)
+            rv.pose = {"x": round(xyz[0], 3), "y": round(xyz[1], 3), "z": round(xyz[2], 3), "yaw": round(yaw, 3),
+                       "stamp": stamp}
             rv.track.add(xyz[0], xyz[1])
         rv.ual_state = int(msg.ual_state)
         water = finite(msg.water_level)

@@ -23,7 +23,7 @@ def test_robot_pose_heading_altitude_and_payload_from_data_feed():
     s.apply("/mbzirc2020_2/data_feed", feed("2", 3.0, 4.0, 6.0, yaw=1.0, water=1.25), 10.0)
     f = s.frame(10.05)
     r = robot(f, "2")
-    assert r["pose"] == {"x": 3.0, "y": 4.0, "z": 6.0, "yaw": 1.0}
+    assert r["pose"] == {"x": 3.0, "y": 4.0, "z": 6.0, "yaw": 1.0, "stamp": 0.0}
     assert r["ual_state"] == "FLYING_AUTO" and r["water"] == 1.25 and r["link"]["status"] == "ok"
     assert robot(f, "1")["link"]["status"] == "unknown" and robot(f, "1")["pose"] is None
 
