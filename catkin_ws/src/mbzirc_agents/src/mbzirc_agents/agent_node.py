@@ -5,24 +5,26 @@ from typing import Any, Dict
 
 import rospy
 
-from .robot_agent import DEFAULT_PARAMS
+from .params import OTHER_NODE_PARAMS, AgentParams, check_values
 from .ros_backend import RosBackend
 
 
-def read_params(extra: Dict[str, Any]) -> Dict[str, Any]:
-    """Every ~param that is set (DEFAULT_PARAMS keys plus extra ones); unset ones keep their defaults."""
-    params = {}
-    for key in list(DEFAULT_PARAMS) + list(extra) + ['facade_holders']:
-        if rospy.has_param('~' + key):
-            params[key] = rospy.get_param('~' + key)
-    return params
+def read_params() -> Dict[str, Any]:
+    """The agent ~params that are set and well-formed (unset ones keep their defaults); each unknown or
+    malformed one is logged as an error and left out: the node runs on with the default."""
+    private = rospy.get_param('~', {})
+    values = {k: v for k, v in private.items() if k not in OTHER_NODE_PARAMS}
+    good, problems = check_values(values)
+    for problem in problems:
+        rospy.logerr(f'{problem}: ignored')
+    return good
 
 
-def main(agent_class: type, node_name: str, extra: Dict[str, Any]) -> None:
+def main(agent_class: type, node_name: str) -> None:
     """Run an agent node until Ctrl+C."""
     rospy.init_node(node_name)
-    params = read_params(extra)
-    agent_id = str(params.get('uav_id', rospy.get_param('~uav_id', '1')))
+    params = read_params()
+    agent_id = str(params.get('uav_id', AgentParams().uav_id))
     ns = rospy.get_namespace().rstrip('/') or f'/mbzirc2020_{agent_id}'
     agent = agent_class(agent_id, RosBackend(), params, ns)
     agent.start()

@@ -29,60 +29,17 @@ from . import constants as C
 from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
-
-# Every ~param of an agent with its default (the README lists them).
-DEFAULT_PARAMS: Dict[str, Any] = {
-    'uav_id': '1',
-    'payload': 'water',
-    'central_unit_timeout': C.CENTRAL_UNIT_TIMEOUT,
-    'return_home_timeout': C.RETURN_HOME_TIMEOUT,
-    'arena': list(C.ARENA_BOX),
-    'region_margin': C.REGION_MARGIN,
-    'region_timeout': C.REGION_WAIT_TIMEOUT,
-    'hold_half_size': C.HOLD_HALF_SIZE,
-    'use_regions': True,
-    'position_tolerance': C.POSITION_TOLERANCE,
-    'yaw_tolerance': C.YAW_TOLERANCE,
-    'max_speed': 1.6,
-    'max_vertical_speed': 1.2,
-    'tank_capacity': 2.0,
-    'water_empty': 0.05,
-    'cruise_altitude': 3.0,            # go_home_and_refill climbs to at least this before flying home
-    'parked_half_size': 0.75,          # a landed UAV keeps the box (x, y +- this, z 0..parked_height)
-    'parked_height': 2.0,
-    'refill_timeout': 60.0,
-    'facade_standoff': C.FACADE_STANDOFF,
-    'shoot_distance': 1.5,
-    'min_wall_distance': 1.0,          # m: centring never moves the UAV centre closer to a facade
-    'check_fire_time': 4.0,
-    'confirm_time': 6.0,
-    'centering_timeout': 30.0,
-    'extinguish_timeout': 60.0,
-    'stop_at_first_fire': True,
-    'ground_search_area': list(C.GROUND_SEARCH_AREA),
-    'ground_search_height': 4.0,
-    'ground_search_spacing': 3.0,
-    'ground_check_time': 1.5,          # s of dwell at each ground-search waypoint (frame filter > 1 s)
-    'blanket_release_height': 1.5,
-    'entry_depth': 2.5,
-    'indoor_fire_distance': 1.5,
-    'top_up_time': 3.0,
-    'fire_litres': C.FIRE_LITRES,      # L a facade / indoor fire's container takes (see tasks/cold_check.py)
-    'indoor_hit_share': C.INDOOR_HIT_SHARE,  # share of the water believed to enter an indoor fire (no hole aim)
-    'building_clearance': 1.5,
-    'home': [],                        # [x, y, z]; empty: the first pose received
-}
-
+from .params import AgentParams
 
 class RobotAgent(Agent):
-    """Base of UavAgent and UgvAgent. `params` holds the node's ~params (see DEFAULT_PARAMS)."""
+    """Base of UavAgent and UgvAgent. `params`: the node's ~params that are set (name -> value, see
+    params.AgentParams; ParamError when one is unknown or malformed)."""
     ROBOT_TYPE = 'uav'
 
     def __init__(self, agent_id: str, backend: Any, params: Dict[str, Any], namespace: str = '') -> None:
         super().__init__(agent_id, backend, namespace)
-        self.p = dict(DEFAULT_PARAMS)
-        self.p.update(params)
-        self.arena = [float(v) for v in self.p['arena']]
+        self.p = AgentParams.from_dict(params)
+        self.arena = list(self.p.arena)
         self.state_lock = threading.Lock()
         self.pose: Optional[np.ndarray] = None          # x, y, z, yaw
         self.pose_msg: Optional[PoseStamped] = None
@@ -92,10 +49,10 @@ class RobotAgent(Agent):
         self.water_level = float('nan')
         self.blanket_attached = False
         self.objects: Dict[int, Any] = {}
-        self.home: Optional[np.ndarray] = np.array(self.p['home'], float) if len(self.p['home']) == 3 else None
+        self.home: Optional[np.ndarray] = np.array(self.p.home) if self.p.home else None
         self.pumping = False
-        self.watchdog = hb.HeartbeatWatchdog(float(self.p['central_unit_timeout']),
-                                             float(self.p['return_home_timeout']))
+        self.watchdog = hb.HeartbeatWatchdog(self.p.central_unit_timeout,
+                                             self.p.return_home_timeout)
         self._went_home = False
         self._home_request = None
         # Why wall time: /clock comes from the simulator on the ground station; when the link is cut the
@@ -130,7 +87,7 @@ class RobotAgent(Agent):
         self._watchdog_thread = threading.Thread(target=self._watchdog_loop, name='heartbeat_watchdog',
                                                  daemon=True)
         self._watchdog_thread.start()
-        if self.p['use_regions']:
+        if self.p.use_regions:
             try:
                 self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, free_all=True))
             except Exception:
@@ -195,7 +152,7 @@ class RobotAgent(Agent):
         msg.header.frame_id = C.GLOBAL_FRAME
         msg.agent_id = self.agent_id
         msg.robot_type = self.ROBOT_TYPE
-        msg.payload = str(self.p['payload'])
+        msg.payload = self.p.payload
         with self.state_lock:
             if self.pose_msg is not None:
                 msg.pose = self.pose_msg
@@ -312,9 +269,9 @@ class RobotAgent(Agent):
         """
         cur = self.position()
         yaw = cur[3] if yaw is None else yaw
-        tol = float(self.p['position_tolerance']) if tolerance is None else tolerance
+        tol = self.p.position_tolerance if tolerance is None else tolerance
         dist = float(np.linalg.norm(np.asarray(target[:3]) - cur[:3]))
-        timeout = dist / max(0.2, 0.5 * float(self.p['max_speed'])) + 20.0
+        timeout = dist / max(0.2, 0.5 * self.p.max_speed) + 20.0
         self.send_waypoint(target[0], target[1], target[2], yaw)
         end = self.backend.now() + timeout
         try:
@@ -323,7 +280,7 @@ class RobotAgent(Agent):
                 p = self.position()
                 dxy = math.hypot(target[0] - p[0], target[1] - p[1])
                 dz = abs(target[2] - p[2]) if self.ROBOT_TYPE == 'uav' else 0.0
-                if dxy <= tol and dz <= tol and abs(wrap_angle(yaw - p[3])) <= float(self.p['yaw_tolerance']):
+                if dxy <= tol and dz <= tol and abs(wrap_angle(yaw - p[3])) <= self.p.yaw_tolerance:
                     return True
                 if stop_when is not None and stop_when():
                     self.hold()
@@ -363,7 +320,7 @@ class RobotAgent(Agent):
     # ---- regions ----------------------------------------------------------------------------------------
     def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None) -> None:
         """Ask for box under label until granted (2 Hz); TaskError after timeout s."""
-        if not self.p['use_regions']:
+        if not self.p.use_regions:
             return
         lo, hi = box
         req = AskForRegionRequest(agent_id=self.agent_id, label=label)
@@ -373,7 +330,7 @@ class RobotAgent(Agent):
         req.max_corner = PointStamped()
         req.max_corner.header.frame_id = C.GLOBAL_FRAME
         req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z = map(float, hi)
-        timeout = float(self.p['region_timeout']) if timeout is None else timeout
+        timeout = self.p.region_timeout if timeout is None else timeout
         end = self.backend.now() + timeout
         while True:
             task.check_preempt()
@@ -390,7 +347,7 @@ class RobotAgent(Agent):
 
     def free(self, label: str = '', free_all: bool = False) -> None:
         """Free one region (or all of ours); errors are only logged (the manager may be gone)."""
-        if not self.p['use_regions']:
+        if not self.p.use_regions:
             return
         try:
             self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, label=label, free_all=free_all))
@@ -438,18 +395,18 @@ class RobotAgent(Agent):
 
     def water_empty(self) -> bool:
         """True when the flow meter says the tank is (nearly) empty."""
-        return math.isfinite(self.water_level) and self.water_level <= float(self.p['water_empty'])
+        return math.isfinite(self.water_level) and self.water_level <= self.p.water_empty
 
     # ---- framework hooks -------------------------------------------------------------------------------
     def safe_stop(self) -> None:
         """After a failed or preempted task: pump off, stop where we are."""
-        if self.pumping or self.p['payload'] == 'water':
+        if self.pumping or self.p.payload == 'water':
             self.stop_pump()
         self.hold()
 
     def idle(self) -> None:
         """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one."""
-        if self.ROBOT_TYPE != 'uav' or not self.p['use_regions'] or self.parked:
+        if self.ROBOT_TYPE != 'uav' or not self.p.use_regions or self.parked:
             return
         if self.ual_state not in (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED) or self.pose is None:
             return
@@ -457,14 +414,14 @@ class RobotAgent(Agent):
         if now - self._last_park_try < 2.0:
             return
         self._last_park_try = now
-        p, h = self.position(wait=0.0), float(self.p['parked_half_size'])
+        p, h = self.position(wait=0.0), self.p.parked_half_size
         req = AskForRegionRequest(agent_id=self.agent_id, label='parked')
         req.min_corner = PointStamped()
         req.max_corner = PointStamped()
         req.min_corner.header.frame_id = req.max_corner.header.frame_id = C.GLOBAL_FRAME
         req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z = p[0] - h, p[1] - h, self.arena[2]
         req.max_corner.point.x, req.max_corner.point.y = p[0] + h, p[1] + h
-        req.max_corner.point.z = p[2] + float(self.p['parked_height'])
+        req.max_corner.point.z = p[2] + self.p.parked_height
         try:
             self.parked = bool(self.ask_srv(req).success)
         except Exception:

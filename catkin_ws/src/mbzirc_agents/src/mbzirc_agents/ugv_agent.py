@@ -18,9 +18,8 @@ UGV_TASKS = [
 ]
 UGV_SUB_TASKS = {'go_to': (ugv.UgvGoTo, {}), 'move': (ugv.UgvGoTo, {'straight': True})}
 
-UGV_DEFAULTS = {'payload': 'water', 'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0,
-                'door_outside': list(C.UGV_DOOR_OUTSIDE), 'door_inside': list(C.UGV_DOOR_INSIDE),
-                'indoor_search_path': [list(p) for p in C.UGV_INDOOR_PATH]}
+# The UGV's defaults where they differ from a UAV's (params.AgentParams).
+UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0}
 
 
 class UgvAgent(RobotAgent):
@@ -43,5 +42,5 @@ class UgvAgent(RobotAgent):
     def cost_to_go_to(self, target) -> float:
         """Length of the planned 2D path (-1 when no path)."""
         here = self.position(wait=0.0)
-        path = plan_2d(here[:2], target[:2], C.BUILDINGS, float(self.p['building_clearance']))
+        path = plan_2d(here[:2], target[:2], C.BUILDINGS, self.p.building_clearance)
         return -1.0 if path is None else path_length(path)

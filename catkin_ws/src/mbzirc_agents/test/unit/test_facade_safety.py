@@ -125,7 +125,7 @@ def test_cold_answers_off_the_hole_do_not_count(scene):
     """The hole moves aside once water flows and the UAV cannot follow (frozen): the pump stops and the
     thermal camera, off the fire, answers "no fire"; that must not make the fire extinguished."""
     agent, ual, be, sc = scene
-    agent.p['extinguish_timeout'] = 8.0
+    agent.p.extinguish_timeout = 8.0
     sc.hot = lambda: bool(ual.pump)               # seen only while centred and pumping
 
     def move_hole_once_pumping():
@@ -298,7 +298,7 @@ def test_holes_are_placed_with_the_pose_of_their_image(scene):
 
 def test_laser_clamps_forward_motion_whatever_the_hole_says(scene):
     agent, ual, be, sc = scene
-    agent.p['centering_timeout'] = 3.0
+    agent.p.centering_timeout = 3.0
     sc.hole = np.array(HOLDER) + [2.5, 0.0, 0.0]             # an estimate 2.5 m behind the wall
     sc.wall = 1.2                                            # the laser: the wall is 1.2 m ahead
     be.pubs['ual/set_velocity'].clear()

@@ -84,7 +84,7 @@ class SearchFacade(AgentTask):
                 continue                                 # a transit waypoint (e.g. around a corner)
             self.feedback('CHECKING', f'holder {i + 1}/{len(stops)}: looking with the thermal camera')
             self.sleep(1.0)                              # let the frame filter forget the last holder
-            if not self._hot(float(a.p['check_fire_time'])):
+            if not self._hot(a.p.check_fire_time):
                 self.feedback('SKIPPING', f'holder {i + 1}/{len(stops)} is cold')
                 continue
             fid = self._track_near(holder if holder is not None else self._ahead(pos, yaw))
@@ -93,7 +93,7 @@ class SearchFacade(AgentTask):
                 continue
             found.append(fid)
             self.feedback('FOUND', f'fire {fid} at holder {i + 1}/{len(stops)}')
-            if a.p['stop_at_first_fire']:
+            if a.p.stop_at_first_fire:
                 break
         self.result['fire_ids'] = found
         self.result['message'] = (f'active facade fires on floor {ud.floor}: {found}' if found
@@ -103,13 +103,13 @@ class SearchFacade(AgentTask):
     def _holder_stops(self, floor: int) -> list:
         """Standoff poses of the floor's holders, nearest first (greedy tour from here)."""
         a = self.agent
-        holders = [tuple(h) for h in a.p.get('facade_holders', C.FACADE_HOLDERS) if floor_of(h[2]) == floor]
+        holders = [tuple(h) for h in a.p.facade_holders if floor_of(h[2]) == floor]
         here = a.position()[:2]
         tour = []
         while holders:
             h = min(holders, key=lambda q: math.hypot(q[0] - here[0], q[1] - here[1]))
             holders.remove(h)
-            pos, yaw = facade_standoff(h, C.BUILDINGS, float(a.p['facade_standoff']))
+            pos, yaw = facade_standoff(h, C.BUILDINGS, a.p.facade_standoff)
             tour.append((pos, yaw, h))
             here = pos[:2]
         return tour
@@ -128,7 +128,7 @@ class SearchFacade(AgentTask):
 
     def _track_near(self, point) -> Optional[int]:
         """Id of an ACTIVE facade fire within 2.5 m of point, waiting up to confirm_time for it."""
-        end = self.agent.backend.now() + float(self.agent.p['confirm_time'])
+        end = self.agent.backend.now() + self.agent.p.confirm_time
         while True:
             for o in self.agent.fires((C.SUBTYPE_FACADE,)):
                 q = o.pose.pose.position
@@ -145,7 +145,7 @@ class GoToFacadeFire(AgentTask):
 
     def run(self, ud) -> str:
         fire = fire_position(self.agent, ud.fire_id)
-        dist = ud.distance or float(self.agent.p['facade_standoff'])
+        dist = ud.distance or self.agent.p.facade_standoff
         pos, yaw = facade_standoff(fire, C.BUILDINGS, dist)
         self.feedback('GOING', f'to fire {ud.fire_id}, {dist:.1f} m in front of it')
         self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
@@ -196,7 +196,7 @@ class ExtinguishFacadeFire(AgentTask):
         self.locked_hole, self.locked_open, self.lock_count = None, False, 0
         self.dry_note = 'still hot, tank empty'
         self.sensed.clear()
-        ctl = HoleCentering(shoot_distance=float(a.p['shoot_distance']))
+        ctl = HoleCentering(shoot_distance=a.p.shoot_distance)
         pos, wall_yaw = facade_standoff(fire, C.BUILDINGS, ctl.shoot_distance)
         self.feedback('APPROACHING', f'to {ctl.shoot_distance:.1f} m in front of fire {ud.fire_id}')
         self.call_task_or_raise('go_to', {'waypoint': (pos, wall_yaw)})
@@ -296,10 +296,10 @@ class ExtinguishFacadeFire(AgentTask):
         while True:
             self.check_preempt()
             now = a.backend.now()
-            if now - start > float(a.p['extinguish_timeout']):
-                raise TaskError(f'not done after {a.p["extinguish_timeout"]:.0f} s')
-            if not centred_once and now - start > float(a.p['centering_timeout']):
-                raise TaskError(f'could not centre the hole in {a.p["centering_timeout"]:.0f} s')
+            if now - start > a.p.extinguish_timeout:
+                raise TaskError(f'not done after {a.p.extinguish_timeout:.0f} s')
+            if not centred_once and now - start > a.p.centering_timeout:
+                raise TaskError(f'could not centre the hole in {a.p.centering_timeout:.0f} s')
             target, source = self._target(fire)
             if self.lock_count != cold_lock:            # another circle is the hole now: start again
                 cold, cold_lock, unseen_cold = ColdConfirmation(), self.lock_count, 0
@@ -313,7 +313,7 @@ class ExtinguishFacadeFire(AgentTask):
             elif pumping_since is not None and now - last_centred > 1.0:
                 a.stop_pump()                           # off target: do not waste water
                 pumping_since = None
-            min_wall = float(a.p['min_wall_distance'])
+            min_wall = a.p.min_wall_distance
             v = ctl.velocity(target, p[3], self.front_range(), min_wall)
             a.send_velocity(keep_off_walls(p, v, min_wall), yaw_rate_to(p[3], wall_yaw))
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
@@ -326,7 +326,7 @@ class ExtinguishFacadeFire(AgentTask):
                 a.hold()                                # no velocity loop while we wait for the answers
                 if not on_hole:
                     return False
-                out, self.dry_note = dry_tank_verdict(cold, meter, float(a.p['fire_litres']), a.fire_detected,
+                out, self.dry_note = dry_tank_verdict(cold, meter, a.p.fire_litres, a.fire_detected,
                                                       self.sleep)
                 a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {self.dry_note}')
                 return out

@@ -40,14 +40,14 @@ class LookForGroundFires(AgentTask):
         if ud.path:
             path = [(pos, yaw) for pos, yaw in ud.path]
         else:
-            h = float(a.p['ground_search_height'])
-            path = [(p, None) for p in lawnmower(a.p['ground_search_area'], float(a.p['ground_search_spacing']), h)]
+            h = a.p.ground_search_height
+            path = [(p, None) for p in lawnmower(a.p.ground_search_area, a.p.ground_search_spacing, h)]
         known = {int(o.id) for o in a.fires((C.SUBTYPE_GROUND,))}
 
         def new_fire() -> bool:
-            return bool(a.p['stop_at_first_fire']) and any(
+            return a.p.stop_at_first_fire and any(
                 int(o.id) not in known for o in a.fires((C.SUBTYPE_GROUND,)))
-        margin = float(a.p['region_margin'])
+        margin = a.p.region_margin
         for i, (wp, yaw) in enumerate(path):
             self.feedback('SEARCHING', f'leg {i + 1}/{len(path)}')
             here = a.position()
@@ -69,11 +69,11 @@ class LookForGroundFires(AgentTask):
         """At a waypoint, watch the downward camera for ~ground_check_time s; when it reports a fire,
         wait up to ~confirm_time for the estimator's track. True when a new fire is known."""
         a = self.agent
-        end = a.backend.now() + float(a.p['ground_check_time'])
+        end = a.backend.now() + a.p.ground_check_time
         while a.backend.now() < end and not new_fire():
             if a.fire_detected():
                 self.feedback('CHECKING', 'the downward camera sees a fire: waiting for its estimate')
-                self.wait_until(new_fire, float(a.p['confirm_time']))
+                self.wait_until(new_fire, a.p.confirm_time)
                 break
             self.sleep(0.25)
         return new_fire()
@@ -99,12 +99,12 @@ class ExtinguishGroundFire(AgentTask):
             raise TaskError('no blanket attached: go home for a new one first')
         fire = np.array(fire_position(a, ud.fire_id))
         self.sensed.clear()
-        h = float(a.p['ground_search_height'])
+        h = a.p.ground_search_height
         self.feedback('APPROACHING', f'over fire {ud.fire_id}')
         self.call_task_or_raise('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)})
-        half = float(a.p['hold_half_size'])
+        half = a.p.hold_half_size
         a.reserve(self, 'descend', column_box(fire[0], fire[1], fire[2], fire[2] + h + half, half + 1.0))
-        ctl = GroundFireCentering(release_height=float(a.p['blanket_release_height']))
+        ctl = GroundFireCentering(release_height=a.p.blanket_release_height)
         try:
             self._descend(ctl, fire, ud.fire_id)
             self.feedback('RELEASING', f'releasing the blanket over fire {ud.fire_id}')
@@ -126,8 +126,8 @@ class ExtinguishGroundFire(AgentTask):
         start = a.backend.now()
         while True:
             self.check_preempt()
-            if a.backend.now() - start > float(a.p['centering_timeout']):
-                raise TaskError(f'could not centre fire {fire_id} in {a.p["centering_timeout"]:.0f} s')
+            if a.backend.now() - start > a.p.centering_timeout:
+                raise TaskError(f'could not centre fire {fire_id} in {a.p.centering_timeout:.0f} s')
             det = self.sensed.recent_fire(0.5)
             target = fire[:2] if det is None or det[2] != C.CAMERA_DOWNWARD else np.array(det[0][:2])
             p = a.position()

@@ -54,7 +54,7 @@ class EnterBuilding(AgentTask):
         (pos, yaw) = ud.entry
         self.feedback('APPROACHING', f'to the window of floor {ud.floor}')
         self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
-        d = float(self.agent.p['entry_depth'])
+        d = self.agent.p.entry_depth
         inside = (pos[0] + d * math.cos(yaw), pos[1] + d * math.sin(yaw), pos[2])
         self.feedback('ENTERING', 'flying through the window')
         self.call_task_or_raise('move', {'waypoint': (inside, yaw)})
@@ -78,7 +78,7 @@ class SearchIndoor(AgentTask):
             self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
             self.call_task_or_raise('move', {'waypoint': (wp, yaw)}, f'waypoint {i + 1}')
             found = self._look(ud.floor, i, len(path), yaw)
-            if found and a.p['stop_at_first_fire']:
+            if found and a.p.stop_at_first_fire:
                 break
         self.result['fire_ids'] = found
         self.result['message'] = (f'active indoor fires on floor {ud.floor}: {found}' if found
@@ -97,7 +97,7 @@ class SearchIndoor(AgentTask):
         a = self.agent
         p = a.position()
         if yaw is not None:
-            yaws, each = [yaw], float(a.p['check_fire_time'])
+            yaws, each = [yaw], a.p.check_fire_time
         else:
             base = round(p[3] / (math.pi / 2)) * (math.pi / 2)   # the walls are axis-aligned
             yaws, each = [base + k * math.pi / 2 for k in range(4)], 2.0
@@ -105,7 +105,7 @@ class SearchIndoor(AgentTask):
             self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/{len(yaws)}')
             a.move_to(self, p[:3], y, 'turning')
             if self._hot(each):
-                end = a.backend.now() + float(a.p['confirm_time'])
+                end = a.backend.now() + a.p.confirm_time
                 while not self._fires(floor) and a.backend.now() < end:
                     self.sleep(0.25)
             found = self._fires(floor)
@@ -134,12 +134,12 @@ class ExtinguishIndoorFire(AgentTask):
         fire = np.array(fire_position(a, ud.fire_id))
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
-        pos, yaw = facing_pose(fire, frm, float(a.p['indoor_fire_distance']))
+        pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
         self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
         cold = ColdConfirmation()
-        if not self._seen_hot(cold, float(a.p['check_fire_time'])):
+        if not self._seen_hot(cold, a.p.check_fire_time):
             if not self._well_localised(ud.fire_id):
                 raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
             return self._top_up(ud.fire_id)
@@ -150,18 +150,18 @@ class ExtinguishIndoorFire(AgentTask):
             meter.update(a.water_level, False)
             while not a.water_empty():
                 self.check_preempt()
-                if a.backend.now() - start > float(a.p['extinguish_timeout']):
+                if a.backend.now() - start > a.p.extinguish_timeout:
                     raise TaskError('timeout while pumping')
                 self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
                 self.sleep(0.5)
-                meter.update(a.water_level, True, float(a.p['indoor_hit_share']))
+                meter.update(a.water_level, True, a.p.indoor_hit_share)
                 if cold.update(a.fire_detected()):
                     break
         finally:
             a.stop_pump()
         out, why = cold.out, 'extinguished'
         if not out:                                     # tank empty: did the last water do it?
-            out, why = dry_tank_verdict(cold, meter, float(a.p['fire_litres']), a.fire_detected, self.sleep)
+            out, why = dry_tank_verdict(cold, meter, a.p.fire_litres, a.fire_detected, self.sleep)
             why = 'extinguished' if out else why
             a.backend.loginfo(f'[{self.name}] fire {ud.fire_id}: tank dry, {why}')
         if out:
@@ -197,7 +197,7 @@ class ExtinguishIndoorFire(AgentTask):
         three times, never finished). A well-localised confirmed track in front of us is that fire.
         """
         a = self.agent
-        seconds = float(a.p['top_up_time'])
+        seconds = a.p.top_up_time
         self.feedback('TOPPING_UP', f'fire {fire_id} reads cold but was never put out: {seconds:.0f} s of water')
         try:
             a.start_pump()

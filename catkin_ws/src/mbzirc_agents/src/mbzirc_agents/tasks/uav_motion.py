@@ -62,7 +62,7 @@ def gen_empty(goal, agent) -> dict:
 
 def hold_box(agent, p):
     """The box a hovering UAV keeps for itself."""
-    h = float(agent.p['hold_half_size'])
+    h = agent.p.hold_half_size
     return (np.array([p[0] - h, p[1] - h, p[2] - h]), np.array([p[0] + h, p[1] + h, p[2] + h]))
 
 
@@ -77,7 +77,7 @@ class TakeOff(AgentTask):
             self.result['message'] = f'already flying at z {p[2]:.1f}'
             return C.SUCCESS
         target_z = p[2] + ud.height
-        half = float(a.p['hold_half_size'])
+        half = a.p.hold_half_size
         self.feedback('WAITING_REGION', 'reserving the take-off column')
         a.reserve(self, 'take_off', column_box(p[0], p[1], p[2], target_z + half, half))
         self.feedback('TAKING_OFF', f'taking off to z {target_z:.1f}')
@@ -106,7 +106,7 @@ class Land(AgentTask):
             a.free(free_all=True)
             self.result['message'] = 'already landed'
             return C.SUCCESS
-        half = float(a.p['hold_half_size'])
+        half = a.p.hold_half_size
         self.feedback('WAITING_REGION', 'reserving the landing column')
         a.reserve(self, 'land', column_box(p[0], p[1], a.arena[2], p[2] + half, half))
         self.feedback('LANDING', f'landing from z {p[2]:.1f}')
@@ -144,7 +144,7 @@ class GoTo(AgentTask):
                    or in_footprint(target, standing_at(target, C.BUILDINGS)))
         # indoors (or entering / leaving through a window) the caller's waypoints are the path
         legs = [tuple(target)] if self.args.get('straight') or indoors else self._legs(start[:3], target)
-        margin = float(a.p['region_margin'])
+        margin = a.p.region_margin
         for i, leg in enumerate(legs):
             here = a.position()
             self.feedback('WAITING_REGION', f'leg {i + 1}/{len(legs)}: reserving the way to {_fmt(leg)}')
@@ -159,7 +159,7 @@ class GoTo(AgentTask):
     def _legs(self, start, target) -> list:
         """Straight when nothing tall is in the way, else the corners of a 2D plan at the target height."""
         obstacles = standing_at((0.0, 0.0, min(start[2], target[2])), C.BUILDINGS)
-        clearance = float(self.agent.p['building_clearance'])
+        clearance = self.agent.p.building_clearance
         for c in (clearance, 0.5 * clearance, 0.3):   # near a wall (shooting distance) a smaller one fits
             path = plan_2d(start[:2], target[:2], obstacles, c)
             if path is not None:
@@ -202,7 +202,7 @@ class GoHomeAndRefill(AgentTask):
             raise TaskError('home unknown (no pose yet)')
         if a.ual_state in FLYING:
             p = a.position()
-            z = max(p[2], float(a.p['cruise_altitude']))
+            z = max(p[2], a.p.cruise_altitude)
             if p[2] < z - 0.2:                    # climb on the spot first: low flight meets parked UAVs
                 self.feedback('CLIMBING', f'climbing to the cruise altitude {z:.1f}')
                 self.call_task_or_raise('go_to', {'waypoint': ((p[0], p[1], z), None)}, 'climbing')
@@ -212,11 +212,11 @@ class GoHomeAndRefill(AgentTask):
         elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > 1.5:
             raise TaskError('landed away from home: take off first')
         self.feedback('REFILLING', 'waiting for the reset (water / blanket)')
-        if a.p['payload'] == 'water':
-            full = 0.95 * float(a.p['tank_capacity'])
-            self.wait_for(lambda: a.water_level >= full, float(a.p['refill_timeout']), 'the tank to be refilled')
+        if a.p.payload == 'water':
+            full = 0.95 * a.p.tank_capacity
+            self.wait_for(lambda: a.water_level >= full, a.p.refill_timeout, 'the tank to be refilled')
         else:
-            self.wait_for(lambda: a.blanket_attached, float(a.p['refill_timeout']), 'a new blanket')
+            self.wait_for(lambda: a.blanket_attached, a.p.refill_timeout, 'a new blanket')
         self.result.update(message='home, refilled', water_level=max(0.0, a.water_level if
                                                                      math.isfinite(a.water_level) else 0.0),
                            has_blanket=a.blanket_attached)

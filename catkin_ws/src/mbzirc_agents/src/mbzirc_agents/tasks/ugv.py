@@ -27,7 +27,7 @@ class UgvGoTo(AgentTask):
         if self.args.get('straight'):
             legs = [(target[0], target[1])]
         else:
-            path = plan_2d(here[:2], target[:2], C.BUILDINGS, float(a.p['building_clearance']))
+            path = plan_2d(here[:2], target[:2], C.BUILDINGS, a.p.building_clearance)
             if path is None:
                 raise TaskError(f'no path to ({target[0]:.1f}, {target[1]:.1f}) around the building')
             legs = path[1:]
@@ -52,11 +52,11 @@ class UgvSearchIndoor(SearchIndoor):
 
     def default_path(self) -> list:
         p = self.agent.p
-        out, ins = p['door_outside'], p['door_inside']
+        out, ins = p.door_outside, p.door_inside
         into = math.atan2(ins[1] - out[1], ins[0] - out[0])
         z = self.agent.position()[2]
         pts = [((out[0], out[1], z), into), ((ins[0], ins[1], z), into)]
-        pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p['indoor_search_path']]
+        pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p.indoor_search_path]
         return pts
 
 

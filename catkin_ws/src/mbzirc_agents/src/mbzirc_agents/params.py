@@ -1,0 +1,157 @@
+"""AgentParams: every ~param of an agent node, once: its name, type, default and meaning.
+
+Why a dataclass: the tasks read `agent.p.<name>` (typed, spelled once) instead of `float(a.p['<name>'])`
+in many places; a misspelt or malformed param is reported at start with a message that names it (the
+node logs it and keeps the default), not found in the middle of a trial. The UGV changes some defaults
+(`ugv_agent.UGV_DEFAULTS`).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field, fields
+from typing import Any, Dict, List, Mapping, Sequence, Tuple
+
+from . import constants as C
+
+# Private params of the agent nodes that other code reads: the backend's service time bound and smach_ros's
+# introspection server switches. They are not agent params, and not unknown either.
+OTHER_NODE_PARAMS = ('service_timeout', 'smach_allow_init', 'smach_allow_debug', 'smach_exclude_keys')
+
+
+class ParamError(ValueError):
+    """One or more ~params are unknown or malformed; the message names each."""
+
+
+def _param(default: Any, meaning: str, lengths: Sequence[int] = (), choices: Sequence[str] = ()) -> Any:
+    """A field with its one-line meaning; `lengths`: allowed list lengths; `choices`: allowed strings."""
+    return field(default_factory=lambda: copy.deepcopy(default),
+                 metadata={'meaning': meaning, 'lengths': tuple(lengths), 'choices': tuple(choices)})
+
+
+def _points(seq: Sequence[Sequence[float]]) -> List[List[float]]:
+    return [[float(v) for v in p] for p in seq]
+
+
+@dataclass
+class AgentParams:
+    """The agent's ~params (README "Params"); build with `from_dict`, which checks every value."""
+    uav_id: str = _param('1', "the agent's id (also the UGV's)")
+    payload: str = _param('water', 'what the robot carries', choices=('water', 'blanket'))
+    central_unit_timeout: float = _param(C.CENTRAL_UNIT_TIMEOUT, 's (wall) of heartbeat silence before the '
+                                         'running task is stopped and goals are rejected')
+    return_home_timeout: float = _param(C.RETURN_HOME_TIMEOUT, 's (wall) of further silence before a flying '
+                                        'UAV goes home by itself')
+    arena: List[float] = _param(list(C.ARENA_BOX), 'x_min, y_min, z_min, x_max, y_max, z_max of the arena: '
+                                'goals outside are refused', lengths=(6,))
+    use_regions: bool = _param(True, 'reserve every motion with /ask_for_region')
+    region_margin: float = _param(C.REGION_MARGIN, 'm added around the box reserved for each flight leg')
+    region_timeout: float = _param(C.REGION_WAIT_TIMEOUT, 's a motion waits for its region')
+    hold_half_size: float = _param(C.HOLD_HALF_SIZE, 'm, half side of the box a hovering UAV holds')
+    position_tolerance: float = _param(C.POSITION_TOLERANCE, 'm from a waypoint that counts as there')
+    yaw_tolerance: float = _param(C.YAW_TOLERANCE, 'rad from a waypoint yaw that counts as there')
+    max_speed: float = _param(1.6, 'm/s; motion time-outs assume half of it')
+    max_vertical_speed: float = _param(1.2, 'm/s, vertical (read by no task yet: the UAL limits the climb rate)')
+    tank_capacity: float = _param(2.0, 'L, a full tank (refilled means 95 % of it)')
+    water_empty: float = _param(0.05, 'L under which the tank is empty')
+    cruise_altitude: float = _param(3.0, 'm go_home_and_refill climbs to at least, before flying home')
+    parked_half_size: float = _param(0.75, 'm: a landed UAV keeps the box x, y +- this, z 0..parked_height')
+    parked_height: float = _param(2.0, 'm, top of the parked box above the UAV')
+    refill_timeout: float = _param(60.0, 's waiting at home for a full tank / a new blanket')
+    facade_holders: List[List[float]] = _param(_points(C.FACADE_HOLDERS), 'x, y, z of the facade fire holders '
+                                               'search_facade visits when its goal has no path', lengths=(3,))
+    facade_standoff: float = _param(C.FACADE_STANDOFF, 'm in front of a facade fire holder to check it')
+    shoot_distance: float = _param(1.5, 'm from the hole while shooting water')
+    min_wall_distance: float = _param(1.0, 'm: the centring loop never moves the UAV closer to a facade')
+    check_fire_time: float = _param(4.0, 's of looking for a fire at a holder / viewpoint')
+    confirm_time: float = _param(6.0, "s waiting for the estimator's track of a detected fire")
+    centering_timeout: float = _param(30.0, 's to centre a hole / a ground fire before giving up')
+    extinguish_timeout: float = _param(60.0, 's of extinguishing before giving up')
+    stop_at_first_fire: bool = _param(True, 'a search returns at the first new fire')
+    ground_search_area: List[float] = _param(list(C.GROUND_SEARCH_AREA), 'x_min, y_min, x_max, y_max of the '
+                                             'default lawn-mower ground search', lengths=(4,))
+    ground_search_height: float = _param(4.0, 'm above the ground of the ground search')
+    ground_search_spacing: float = _param(3.0, 'm between the lawn-mower legs')
+    ground_check_time: float = _param(1.5, 's of dwell at each ground-search waypoint (frame filter > 1 s)')
+    blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
+    entry_depth: float = _param(2.5, 'm flown straight in through a window')
+    indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
+    top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
+    fire_litres: float = _param(C.FIRE_LITRES, "L a facade / indoor fire's container takes "
+                                "(see tasks/cold_check.py)")
+    indoor_hit_share: float = _param(C.INDOOR_HIT_SHARE, 'share of the water believed to enter an indoor '
+                                     'fire (no hole to aim at)')
+    building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
+    home: List[float] = _param([], 'x, y, z of home; empty: the first pose received', lengths=(0, 3))
+    door_outside: List[float] = _param(list(C.UGV_DOOR_OUTSIDE), 'UGV: x, y in front of the door',
+                                       lengths=(2,))
+    door_inside: List[float] = _param(list(C.UGV_DOOR_INSIDE), 'UGV: x, y just inside the door', lengths=(2,))
+    indoor_search_path: List[List[float]] = _param(_points(C.UGV_INDOOR_PATH), 'UGV: x, y[, yaw] of the '
+                                                   'indoor viewpoints', lengths=(2, 3))
+
+    @classmethod
+    def names(cls) -> List[str]:
+        return [f.name for f in fields(cls)]
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> 'AgentParams':
+        """The params with `values` over the defaults; one ParamError naming each unknown or malformed one."""
+        good, problems = check_values(values)
+        if problems:
+            raise ParamError('; '.join(problems))
+        return cls(**good)
+
+
+def check_values(values: Mapping[str, Any]) -> Tuple[Dict[str, Any], List[str]]:
+    """(the well-formed values, each as its param's type; a message for each unknown or malformed one)."""
+    known = {f.name: f for f in fields(AgentParams)}
+    good: Dict[str, Any] = {}
+    problems = []
+    for name, value in values.items():
+        if name not in known:
+            problems.append(f'unknown param ~{name}')
+            continue
+        try:
+            good[name] = _check(known[name], value)
+        except ValueError as e:
+            problems.append(f'~{name}: {e} (default {getattr(AgentParams(), name)!r})')
+    return good, problems
+
+
+def _number(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f'expected a finite number, got {value!r}')
+    return float(value)
+
+
+def _numbers(value: Any, lengths: Sequence[int]) -> List[float]:
+    if not isinstance(value, (list, tuple)):
+        raise ValueError(f'expected a list of numbers, got {value!r}')
+    if lengths and len(value) not in lengths:
+        raise ValueError(f'expected {" or ".join(map(str, lengths))} numbers, got {len(value)}')
+    return [_number(v) for v in value]
+
+
+def _check(f: Any, value: Any) -> Any:
+    """value as the field's type; ValueError saying what is wrong."""
+    kind, lengths, choices = f.type, f.metadata['lengths'], f.metadata['choices']
+    if kind == 'float':
+        return _number(value)
+    if kind == 'bool':
+        if not isinstance(value, bool):
+            raise ValueError(f'expected true or false, got {value!r}')
+        return value
+    if kind == 'str':
+        if isinstance(value, bool) or not isinstance(value, (str, int)):
+            raise ValueError(f'expected a string, got {value!r}')
+        if choices and str(value) not in choices:
+            raise ValueError(f'expected one of {list(choices)}, got {value!r}')
+        return str(value)
+    if kind == 'List[float]':
+        return _numbers(value, lengths)
+    if kind == 'List[List[float]]':
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f'expected a list of points, got {value!r}')
+        return [_numbers(v, lengths) for v in value]
+    raise TypeError(f'no check for a param of type {kind}')
+
