@@ -1,5 +1,8 @@
-"""What every benchmark script shares: where the workspace and the results are, single-threaded numerics,
-the machine's load average next to the figures, and writing bench/results/<name>.json.
+"""What every benchmark script shares: where the workspace and the results are, the machine's load average
+next to the figures, and writing bench/results/<name>.json.
+
+No benchmark sets the nodes' environment (thread counts and the like): each measures the code the way
+`roslaunch` runs it (the node packages set single-threaded numerics themselves, at import).
 
 Not a benchmark itself (tools/run_bench.sh runs bench_*.py only). The scripts import it as `_common`:
 Python puts the script's own folder, bench/, first on sys.path.
@@ -13,15 +16,6 @@ ROOT = os.path.dirname(HERE)
 SRC = os.path.join(ROOT, "catkin_ws", "src")
 # BENCH_RESULTS_DIR: write elsewhere (a trial run, a --quick check) without replacing the reference figures.
 RESULTS = os.environ.get("BENCH_RESULTS_DIR") or os.path.join(HERE, "results")
-
-
-def single_threaded() -> None:
-    """One thread per numeric library (OpenMP, OpenBLAS, MKL), for figures that are one core's.
-
-    Call it before numpy or OpenCV is imported: the libraries read these variables when they load.
-    """
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[name] = "1"
 
 
 def use_sources(*paths: str) -> None:

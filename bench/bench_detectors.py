@@ -20,10 +20,13 @@ import os
 import sys
 import time
 
-from _common import SRC, single_threaded, use_sources, write_result
+from _common import SRC, use_sources, write_result
 
-single_threaded()
 use_sources("fire_detector/src", "circle_detector/src")
+
+# the detectors' packages before numpy and OpenCV: they set the numeric libraries up as in the nodes
+import circle_detector  # noqa: E402,F401
+import fire_detector  # noqa: E402,F401
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -37,7 +40,6 @@ from fire_detector import synthetic as FS  # noqa: E402
 from fire_detector.detector import DetectorConfig, FireDetector  # noqa: E402
 from fire_detector.geometry import front_laser_range  # noqa: E402
 
-cv2.setNumThreads(1)
 QUICK = "--quick" in sys.argv
 FIRE_BANDS = [(1.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, 6.0), (6.0, 8.0)]
 HOLE_BANDS = [(1.0, 1.5), (1.5, 2.5), (2.5, 4.0), (4.0, 6.0), (6.0, 8.0)]

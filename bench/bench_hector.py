@@ -3,9 +3,9 @@
 
 Throughput: scans per CPU second (one core) of the whole per-scan pipeline (range filtering, coarse-to-fine matching,
 map update when the thresholds say so) for ual_sim's 720-beam laser, a 2048 x 2048 map at 0.05 m with
-2 levels (the thesis's settings), pinned to one core with single-threaded BLAS. Four cases: matching only
-(no map update), every scan updating the map (worst case), and the thesis's thresholds on the slow and on
-the fast-turning flight.
+2 levels (the thesis's settings), pinned to one core, numpy as the node runs it (one OpenBLAS thread).
+Four cases: matching only (no map update), every scan updating the map (worst case), and the thesis's
+thresholds on the slow and on the fast-turning flight. The node as launched: bench_hector_node.py.
 
 Accuracy: simulated flights on the tower's first floor of ual_sim's world (laser at 15 Hz, 1 cm range
 noise, no odometry): a slow one (0.3 m/s, turning on the spot at 0.5 rad/s) and a fast one (1 m/s while
@@ -21,17 +21,17 @@ from __future__ import annotations
 import os
 import time
 
-from _common import load_average_1min, single_threaded, use_sources, write_result
+from _common import load_average_1min, use_sources, write_result
 
-single_threaded()
 use_sources("hector_mapping/src")
 
-import numpy as np  # noqa: E402
-
+# hector_mapping before numpy: the package sets numpy's threads up as in the node
 from hector_mapping import indoor, sim2d  # noqa: E402
 from hector_mapping.geometry import transform_points  # noqa: E402
 from hector_mapping.scan import ScanFilter, scan_to_points  # noqa: E402
 from hector_mapping.slam import HectorSlam, SlamParams  # noqa: E402
+
+import numpy as np  # noqa: E402,I100
 
 RATE = 15.0
 NOISE = 0.01

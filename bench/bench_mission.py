@@ -3,7 +3,9 @@
 
 Prints and writes bench/results/mission.json: share of seeds with all 8 fires out within the 20 simulated
 minutes, mean time to put out every fire, mean score, crashes, real-time factor reached (sim time / wall
-time of the same run). Long: about 20/RTF minutes per seed.
+time of the same run) and, next to it, the CPU the trial cost: CPU seconds per simulated second, in all and
+per node kind (agents, ual_sim, detectors, central unit, estimator, others), sampled from /proc for the
+whole run (_node_cpu.py). Long: about 20/RTF minutes per seed (less when every fire is out early).
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
 The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`).
 """
@@ -17,7 +19,8 @@ import subprocess
 import sys
 import time
 
-from _common import ROOT, write_result
+from _common import ROOT, load_averages, write_result
+from _node_cpu import KINDS, NodeCpuSampler, per_sim_second
 
 
 def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
@@ -25,15 +28,27 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
            f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1"]
     t0 = time.time()
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    sampler = NodeCpuSampler(proc.pid).start()
+    output, _ = proc.communicate()
+    sampler.stop()
     wall = time.time() - t0
     path = os.path.join(out, "summary.json")
     if not os.path.exists(path):
-        return {"seed": seed, "error": (proc.stdout + proc.stderr)[-800:], "wall_total_s": wall}
+        return {"seed": seed, "error": output[-800:], "wall_total_s": wall}
     with open(path, encoding="utf-8") as f:
         s = json.load(f)
     s["wall_total_s"] = round(wall, 1)
+    s["cpu_s"] = sampler.cpu_by_kind()
+    s["cpu_s_per_sim_s"] = per_sim_second(s["cpu_s"], s.get("sim_time_s") or 0.0)
+    s["load_average_end"] = load_averages()
     return s
+
+
+def mean_cpu_per_sim_s(runs: list) -> dict:
+    """CPU seconds per simulated second of every kind, over the runs (total CPU / total sim time)."""
+    sim = sum(r.get("sim_time_s") or 0.0 for r in runs)
+    return {k: round(sum(r["cpu_s"][k] for r in runs) / sim, 4) for k in KINDS + ("total",)} if sim else None
 
 
 def summarize(runs: list, args: argparse.Namespace) -> dict:
@@ -54,13 +69,21 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
         "mean_real_time_factor": round(statistics.mean(r["real_time_factor"] for r in ok
                                                        if r.get("real_time_factor")), 2) if ok else None,
         "mean_wall_per_trial_s": round(statistics.mean(r["wall_total_s"] for r in runs), 1) if runs else None,
+        "cpu_s_per_sim_s": mean_cpu_per_sim_s(ok),
         "per_seed": [{k: r.get(k) for k in ("seed", "fires_extinguished", "fires_total", "score",
                                             "all_out_time_s", "crashes", "real_time_factor", "end_reason",
-                                            "min_separation_m", "error")} for r in runs],
+                                            "min_separation_m", "sim_time_s", "cpu_s", "cpu_s_per_sim_s",
+                                            "load_average_end", "error")} for r in runs],
     }
     res["seeds_requested"] = args.seeds
     write_result("mission", res, say=False)
     return res
+
+
+def format_cpu(per_kind: dict) -> str:
+    """'total 0.41: agents 0.12, ual_sim 0.11, ...' (kinds that cost nothing left out)."""
+    parts = [f"{k} {per_kind[k]:.3f}" for k in KINDS if per_kind.get(k)]
+    return f"total {per_kind.get('total', 0):.3f}: " + ", ".join(parts)
 
 
 def main() -> int:
@@ -84,6 +107,8 @@ def main() -> int:
             print(f"seed {seed}: {s['fires_extinguished']}/{s['fires_total']} out, score {s['score']}, "
                   f"all out at {s.get('all_out_time_s')} s, crashes {s['crashes'] or 'none'}, "
                   f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
+            print(f"  CPU-s per sim-s: {format_cpu(s['cpu_s_per_sim_s'])} (load {s['load_average_end']})",
+                  flush=True)
         summarize(runs, args)
     res = summarize(runs, args)
     print(json.dumps({k: v for k, v in res.items() if k != "per_seed"}, indent=2))

@@ -10,6 +10,10 @@ import numpy as np
 from circle_detector import constants as C
 from circle_detector.rectify import fit_plane, intersect, rectification, to_original
 
+# No OpenCV worker threads: a frame takes a few ms, and the robot's computer is shared by many nodes, so
+# threads cost more CPU than they save (bench_detectors measures the pipeline this way, as the node runs).
+cv2.setNumThreads(1)
+
 
 @dataclass
 class HoughParams:
