@@ -6,6 +6,8 @@ generated message classes, and bare numbers (`ual_state in (4, 5)`, `color = 6`)
 """
 from __future__ import annotations
 
+import math
+
 # ---- mbzirc_comm_objs/ObjectDetection TYPE_* and COLOR_* ---------------------------------------------
 TYPE_UNKNOWN = 0
 TYPE_FIRE = 8
@@ -56,3 +58,16 @@ UGV_ID = '0'             # robot 0 is the UGV, 1..N the UAVs
 def robot_ns(agent_id) -> str:
     """Namespace of a robot: the original team's naming, `mbzirc2020_<id>`."""
     return f'mbzirc2020_{agent_id}'
+
+
+def feed_position(feed):
+    """(x, y, z) of an AgentDataFeed's pose; None while the agent has none yet or it is not finite.
+
+    Rule: a PoseStamped without a frame_id is no place. An agent publishes its feed before the UAL's first
+    pose, with an empty PoseStamped whose (0, 0, 0) is not where the robot is.
+    """
+    if not feed.pose.header.frame_id:
+        return None
+    p = feed.pose.pose.position
+    xyz = (p.x, p.y, p.z)
+    return xyz if all(math.isfinite(v) for v in xyz) else None

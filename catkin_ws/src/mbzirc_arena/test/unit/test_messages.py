@@ -43,3 +43,14 @@ def test_set_object_status_uses_the_object_status_values():
 def test_ual_groups():
     assert M.UAL_FLYING == (M.UAL_FLYING_AUTO, M.UAL_FLYING_MANUAL)
     assert M.UAL_LANDING not in M.UAL_LANDED and M.UAL_TAKING_OFF not in M.UAL_FLYING
+
+
+def test_a_feed_without_a_frame_or_with_a_nan_is_no_place():
+    from types import SimpleNamespace as NS
+    feed = NS(pose=NS(header=NS(frame_id=''), pose=NS(position=NS(x=0.0, y=0.0, z=0.0))))
+    assert M.feed_position(feed) is None
+    feed.pose.header.frame_id = M.GLOBAL_FRAME
+    feed.pose.pose.position = NS(x=4.0, y=-4.0, z=0.2)
+    assert M.feed_position(feed) == (4.0, -4.0, 0.2)
+    feed.pose.pose.position.y = float('nan')
+    assert M.feed_position(feed) is None

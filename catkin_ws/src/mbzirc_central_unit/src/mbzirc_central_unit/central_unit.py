@@ -17,13 +17,14 @@ import yaml
 from actionlib_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs import msg as cmsg
+from mbzirc_arena.messages import feed_position
 from mbzirc_comm_objs.srv import FreeRegions
 from std_msgs.msg import Header, String
 
 from . import constants as C
 from .layout import Layout, load_world
 from .strategy import Command, Strategy, StrategyParams
-from .world_model import AgentView, FireView, WorldView, classify_fire, feed_position
+from .world_model import AgentView, FireView, WorldView, fire_kind
 
 ACTION_TYPES = {
     C.TAKE_OFF: "TakeOff", C.LAND: "Land", C.GO_TO: "GoTo", C.FOLLOW_PATH: "FollowPath", C.HOVER: "Hover",
@@ -178,7 +179,7 @@ class CentralUnit:
             if not _finite(p.x, p.y, p.z):
                 rospy.logerr_throttle(5.0, f"central_unit: estimated object {o.id} has a non-finite pose: ignored")
                 continue
-            fires[o.id] = FireView(o.id, p.x, p.y, p.z, classify_fire(o.sub_type, p.x, p.y, p.z), o.status)
+            fires[o.id] = FireView(o.id, p.x, p.y, p.z, fire_kind(o.sub_type, p.x, p.y, p.z), o.status)
         with self.lock:
             self.fires = fires
 

@@ -3,15 +3,17 @@
 A UAV never changes altitude next to the building except inside its virtual elevator, a vertical column
 at a tower corner; at a fixed altitude it goes around the footprint of whatever part of the building is
 taller than it. This keeps the UAVs separated: each has its own transit altitude and its own elevator.
-The segment-vs-rectangle test and the visibility-graph search are the agents' (mbzirc_agents.geometry):
-the strategy and the agents route around the same building with the same code.
+The building, the floors, the segment-vs-rectangle test and the visibility-graph search are the arena's
+(mbzirc_arena): the strategy and the agents route around the same building with the same code.
 """
 from __future__ import annotations
 
 import math
 from typing import Optional, Sequence
 
-from mbzirc_agents import geometry as AG
+from mbzirc_arena import c3
+from mbzirc_arena import routing as R
+from mbzirc_arena.c3 import floor_of  # noqa: F401  (the strategy's floor rule is the arena's)
 
 from . import constants as C
 
@@ -24,15 +26,7 @@ SHRINK = 1e-4  # m: a segment must enter a rectangle this far to hit it
 CORNER_PAD = 0.3  # corner waypoints sit this far outside the inflated rectangle
 
 
-def floor_of(z: float) -> int:
-    """Floor index (0, 1, 2) of an altitude."""
-    for f in range(C.NUM_FLOORS):
-        if z < C.FLOOR_BOUNDS[f + 1]:
-            return f
-    return C.NUM_FLOORS - 1
-
-
-def obstacle_rect(z: float, margin: float, boxes: Sequence = C.BUILDING_BOXES,
+def obstacle_rect(z: float, margin: float, boxes: Sequence = c3.BUILDING_BOXES,
                   clearance: float = 1.0) -> Optional[Rect]:
     """Footprint (bounding rectangle, inflated by `margin`) of the boxes reaching above z - clearance."""
     rects = [b for b in boxes if b[5] > z - clearance and b[2] < z + clearance]
@@ -50,7 +44,7 @@ def inside(p: Sequence[float], r: Rect, tol: float = EPS) -> bool:
 def segment_hits_rect(p: Sequence[float], q: Sequence[float], r: Rect) -> bool:
     """True if the 2D segment p-q passes through the open interior of r, shrunk by SHRINK so that a
     route along the border (or ending on it) does not count."""
-    return AG.segment_hits_rect(p, q, r, shrink=SHRINK)
+    return R.segment_hits_rect(p, q, r, shrink=SHRINK)
 
 
 def push_out(p: Sequence[float], r: Rect) -> tuple[float, float]:
@@ -70,7 +64,7 @@ def route_2d(p: Sequence[float], q: Sequence[float], r: Optional[Rect]) -> list[
     corners = [(r[0] - CORNER_PAD, r[1] - CORNER_PAD), (r[2] + CORNER_PAD, r[1] - CORNER_PAD),
                (r[2] + CORNER_PAD, r[3] + CORNER_PAD), (r[0] - CORNER_PAD, r[3] + CORNER_PAD)]
     nodes = [tuple(p[:2]), tuple(q[:2])] + corners
-    path = AG.shortest_path(nodes, lambda i, j: not segment_hits_rect(nodes[i], nodes[j], r), tie_tol=EPS)
+    path = R.shortest_path(nodes, lambda i, j: not segment_hits_rect(nodes[i], nodes[j], r), tie_tol=EPS)
     return [] if path is None else [nodes[k] for k in path[1:-1]]
 
 
@@ -102,7 +96,7 @@ def elevator_points(margin: float = C.ELEVATOR_MARGIN) -> list[tuple[float, floa
     """
     if margin == C.ELEVATOR_MARGIN:
         return [tuple(e) for e in C.ELEVATORS]
-    t = C.TOWER_BOX
+    t = c3.TOWER_BOX
     return [(t[0] - margin, t[4] + margin), (t[3] + margin, t[1] - margin)]
 
 
@@ -132,7 +126,7 @@ def plan_route(start: Point, goal: Point, elevator: int, same_level_tol: float =
 
 def facade_of(holder: Point) -> str:
     """Facade letter of a holder: A (north wall), C (west wall), D (east wall of the tower)."""
-    t = C.TOWER_BOX
+    t = c3.TOWER_BOX
     if abs(holder[1] - t[4]) < 0.3:
         return "A"
     if abs(holder[0] - t[0]) < 0.3:
@@ -162,7 +156,7 @@ def _perimeter_key(holder: Point) -> float:
     return 200.0 - holder[1]
 
 
-def facade_search_path(floor: int, holders: Sequence[Point] = C.FACADE_HOLDERS,
+def facade_search_path(floor: int, holders: Sequence[Point] = c3.FACADE_HOLDERS,
                        standoff: float = C.FACADE_STANDOFF, reverse: bool = False) -> list[Pose]:
     """Viewpoints of every holder of one floor in perimeter order, with corner waypoints between facades."""
     mine = sorted((h for h in holders if floor_of(h[2]) == floor), key=_perimeter_key, reverse=reverse)
@@ -178,9 +172,8 @@ def facade_search_path(floor: int, holders: Sequence[Point] = C.FACADE_HOLDERS,
     return path
 
 
-def ground_search_path(start: Sequence[float], altitude: float = C.GROUND_SEARCH_ALTITUDE,
-                       candidates: Sequence[Point] = C.GROUND_FIRE_CANDIDATES) -> list[Pose]:
-    """Nearest-neighbour tour over the known outdoor fire holders at the search altitude."""
+def ground_search_path(start: Sequence[float], altitude: float, candidates: Sequence[Point]) -> list[Pose]:
+    """Nearest-neighbour tour over the ground fire places (the layout's) at the search altitude."""
     left = list(candidates)
     cur = (start[0], start[1])
     out: list[Pose] = []

@@ -8,8 +8,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
+from mbzirc_arena.c3 import classify_fire as arena_classify_fire
+from mbzirc_arena.c3 import floor_of
+
 from . import constants as C
-from .geometry import floor_of, inside
 
 
 @dataclass
@@ -81,33 +83,15 @@ class FireView:
         return self.status in (C.STATUS_ACTIVE, C.STATUS_DETECTED, C.STATUS_LOST)
 
 
-def feed_position(feed) -> Optional[tuple]:
-    """(x, y, z) of an AgentDataFeed's pose; None while the agent has none yet or it is not finite.
-
-    Why: an agent publishes its feed before the UAL's first pose, with an empty PoseStamped (no frame_id)
-    whose (0, 0, 0) is not a place; the recorder once took a UGV there 0.56 m under a UAV taking off.
-    """
-    if not feed.pose.header.frame_id:
-        return None
-    p = feed.pose.pose.position
-    xyz = (p.x, p.y, p.z)
-    return xyz if all(math.isfinite(v) for v in xyz) else None
+KIND_OF_SUBTYPE = {C.SUBTYPE_FACADE: C.KIND_FACADE, C.SUBTYPE_GROUND: C.KIND_GROUND, C.SUBTYPE_INDOOR: C.KIND_INDOOR}
 
 
-def classify_fire(sub_type: int, x: float, y: float, z: float) -> str:
-    """Kind of a fire: the estimator's sub_type when it knows it, else from where the fire is
-    (well inside a building box: indoor; on or near a wall: facade; elsewhere: ground)."""
-    by_subtype = {C.SUBTYPE_FACADE: C.KIND_FACADE, C.SUBTYPE_GROUND: C.KIND_GROUND,
-                  C.SUBTYPE_INDOOR: C.KIND_INDOOR}
-    if sub_type in by_subtype:
-        return by_subtype[sub_type]
-    for b in C.BUILDING_BOXES:
-        if z < b[5] and inside((x, y), (b[0] + 0.6, b[1] + 0.6, b[3] - 0.6, b[4] - 0.6)):
-            return C.KIND_INDOOR
-    for b in C.BUILDING_BOXES:
-        if z < b[5] + 1.0 and inside((x, y), (b[0] - 1.5, b[1] - 1.5, b[3] + 1.5, b[4] + 1.5)):
-            return C.KIND_FACADE
-    return C.KIND_GROUND
+def fire_kind(sub_type: int, x: float, y: float, z: float) -> str:
+    """Kind of a fire: the estimator's sub_type when it knows it, else the arena's rule on where the fire is
+    (mbzirc_arena `classify_fire`, the rule the estimator applies too)."""
+    if sub_type not in KIND_OF_SUBTYPE:
+        sub_type = arena_classify_fire((x, y, z))
+    return KIND_OF_SUBTYPE[sub_type]
 
 
 DUPLICATE_RADIUS = 2.0  # m

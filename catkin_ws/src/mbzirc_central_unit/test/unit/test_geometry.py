@@ -3,6 +3,8 @@ import math
 
 import pytest
 
+from mbzirc_arena import c3
+
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit import geometry as G
 
@@ -10,7 +12,7 @@ from mbzirc_central_unit import geometry as G
 def _segments_clear(path, margin=0.0):
     """True if no segment of a 3D path crosses a building box it is not above."""
     for p, q in zip(path, path[1:]):
-        for b in C.BUILDING_BOXES:
+        for b in c3.BUILDING_BOXES:
             rect = (b[0] - margin, b[1] - margin, b[3] + margin, b[4] + margin)
             for s in range(21):
                 t = s / 20
@@ -18,10 +20,6 @@ def _segments_clear(path, margin=0.0):
                 if z < b[5] and G.inside((x, y), rect):
                     return False
     return True
-
-
-def test_floor_of():
-    assert [G.floor_of(z) for z in (0.75, 2.75, 6.0, 8.25, 10.25, 12.75)] == [0, 0, 1, 1, 2, 2]
 
 
 def test_segment_hits_rect():
@@ -66,7 +64,7 @@ def test_elevators_are_at_opposite_corners_and_far_apart():
 
 def test_facade_search_path_visits_every_holder_of_the_floor_without_crossing_the_tower():
     for floor in range(3):
-        holders = [h for h in C.FACADE_HOLDERS if G.floor_of(h[2]) == floor]
+        holders = [h for h in c3.FACADE_HOLDERS if G.floor_of(h[2]) == floor]
         path = G.facade_search_path(floor)
         vps = [G.viewpoint(h) for h in holders]
         for vp in vps:
@@ -86,7 +84,7 @@ def test_viewpoint_faces_the_wall():
 
 
 def test_ground_paths():
-    path = G.ground_search_path((-2, 1.65, 3), 3.0)
+    path = G.ground_search_path((-2, 1.65, 3), 3.0, [(-9.0, 20.0, 0.0), (1.0, 14.0, 0.0)])
     assert len(path) == 4
     assert math.dist(path[0][:2], (1.0, 14.0)) < 0.35 and math.dist(path[1][:2], (1.0, 14.0)) < 0.35
     assert math.dist(path[2][:2], (-9.0, 20.0)) < 0.35 and math.dist(path[3][:2], (-9.0, 20.0)) < 0.35
@@ -95,7 +93,6 @@ def test_ground_paths():
 
 
 def test_elevators_keep_clear_of_outdoor_fire_holders_and_the_building():
-    from mbzirc_central_unit.layout import DEFAULT_GROUND_HOLDERS
     for e in G.elevator_points():
-        assert min(math.dist(e, h[:2]) for h in DEFAULT_GROUND_HOLDERS) > 4.0
+        assert min(math.dist(e, h[:2]) for h in c3.GROUND_FIRE_PLACES) > 4.0
         assert G.obstacle_rect(1.0, 3.0) is None or not G.inside(e, G.obstacle_rect(1.0, 3.0))

@@ -1,12 +1,13 @@
 """The C3 strategy: assignment, refill and reassignment, first floor last, silent agents, restart."""
 import math
 
+from mbzirc_arena import c3
 from fake_mission import FakeMission, TRUE_FIRES
 
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit import geometry as G
 from mbzirc_central_unit.strategy import Strategy, StrategyParams
-from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, classify_fire
+from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, fire_kind
 
 
 def _tasks(cmds):
@@ -58,7 +59,7 @@ def test_facade_search_starts_at_the_end_nearest_the_uav():
         s = Strategy(StrategyParams(floor_priority=(0,)))
         cmd = s.decide(WorldView(0.0, {"2": a}, {}))[0]
         first = cmd.goal["path"][-1]
-        holder = [h for h in C.FACADE_HOLDERS if G.floor_of(h[2]) == 0 and
+        holder = [h for h in c3.FACADE_HOLDERS if G.floor_of(h[2]) == 0 and
                   math.dist(G.viewpoint(h)[:3], first[:3]) < 1e-6][0]
         assert G.facade_of(holder) == expected_first
 
@@ -191,12 +192,12 @@ def test_extinguished_fires_and_their_stray_tracks_are_not_targets():
                for c in cmds)
 
 
-def test_classify_fire_by_position():
-    assert classify_fire(C.SUBTYPE_UNKNOWN, 1.0, 14.0, 0.0) == C.KIND_GROUND
-    assert classify_fire(C.SUBTYPE_UNKNOWN, 11.4, 8.5, 6.0) == C.KIND_FACADE
-    assert classify_fire(C.SUBTYPE_UNKNOWN, 11.1, 8.5, 6.0) == C.KIND_FACADE
-    assert classify_fire(C.SUBTYPE_UNKNOWN, 17.0, 12.0, 6.0) == C.KIND_INDOOR
-    assert classify_fire(C.SUBTYPE_GROUND, 17.0, 12.0, 6.0) == C.KIND_GROUND
+def test_fire_kind_by_position_when_the_estimator_gives_no_subtype():
+    assert fire_kind(C.SUBTYPE_UNKNOWN, 1.0, 14.0, 0.0) == C.KIND_GROUND
+    assert fire_kind(C.SUBTYPE_UNKNOWN, 11.4, 8.5, 6.0) == C.KIND_FACADE
+    assert fire_kind(C.SUBTYPE_UNKNOWN, 11.1, 8.5, 6.0) == C.KIND_FACADE
+    assert fire_kind(C.SUBTYPE_UNKNOWN, 17.0, 12.0, 6.0) == C.KIND_INDOOR
+    assert fire_kind(C.SUBTYPE_GROUND, 17.0, 12.0, 6.0) == C.KIND_GROUND
 
 
 def test_uavs_take_the_ground_floor_indoors_when_the_ugv_is_gone():

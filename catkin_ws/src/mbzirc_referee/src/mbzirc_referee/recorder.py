@@ -15,10 +15,12 @@ import rospy
 from mbzirc_comm_objs.msg import AgentDataFeed
 from std_msgs.msg import Bool, String
 
-from mbzirc_central_unit import constants as C
+from mbzirc_arena import c3
+from mbzirc_arena import messages as M
+from mbzirc_arena.messages import feed_position
+
 from .report import write_report
 from .summary import MissionRecord
-from mbzirc_central_unit.world_model import feed_position
 
 try:  # the simulator's types: optional so that the recorder still runs against a real-robot setup
     from ual_sim.msg import FireStateArray, Score
@@ -36,7 +38,7 @@ class MissionRecorder:
         self.progress_period = float(rospy.get_param("~progress_period", 10.0))
         self.expected_fires = int(rospy.get_param("~expected_fires", 8))
         self.rec = MissionRecord(seed=int(rospy.get_param("~seed", 0)),
-                                 duration=float(rospy.get_param("~duration", C.MISSION_DURATION)))
+                                 duration=float(rospy.get_param("~duration", c3.TRIAL_DURATION)))
         self.extra = {"uavs": int(rospy.get_param("~uavs", 3)), "ugv": bool(rospy.get_param("~ugv", True)),
                       "rtf_requested": float(rospy.get_param("~rtf", 0.0))}
         self.lock = threading.Lock()
@@ -49,9 +51,9 @@ class MissionRecorder:
         os.makedirs(self.out_dir, exist_ok=True)
         self.done_pub = rospy.Publisher("~done", Bool, queue_size=1, latch=True)
         self.done_pub.publish(Bool(False))
-        ids = [C.UGV_ID] if self.extra["ugv"] else []
+        ids = [M.UGV_ID] if self.extra["ugv"] else []
         ids += [str(i) for i in range(1, self.extra["uavs"] + 1)]
-        self.subs = [rospy.Subscriber(f"/{C.robot_ns(i)}/data_feed", AgentDataFeed, self._on_feed,
+        self.subs = [rospy.Subscriber(f"/{M.robot_ns(i)}/data_feed", AgentDataFeed, self._on_feed,
                                       callback_args=i, queue_size=1) for i in ids]
         self.subs.append(rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=1))
         if FireStateArray is not None:
@@ -70,7 +72,7 @@ class MissionRecorder:
                 rospy.logerr_throttle(10.0, f"mission_recorder: non-finite pose from {robot}")
             return                                  # else: no pose yet, (0, 0, 0) is not a place
         with self.lock:
-            self.rec.robot_kinds[robot] = "ugv" if msg.robot_type == C.ROBOT_UGV else (msg.payload or "?")
+            self.rec.robot_kinds[robot] = "ugv" if msg.robot_type == M.ROBOT_UGV else (msg.payload or "?")
             self.rec.add_pose(robot, rospy.get_time(), *xyz)
 
     def _on_status(self, msg: String) -> None:

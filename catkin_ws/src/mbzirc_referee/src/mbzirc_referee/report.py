@@ -10,7 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
-from mbzirc_central_unit import constants as C  # noqa: E402
+from mbzirc_arena.c3 import ARENA  # noqa: E402
+
 from .summary import MissionRecord  # noqa: E402
 
 KIND_STYLE = {"ground": ("s", "tab:brown"), "facade": ("^", "tab:red"), "indoor": ("o", "tab:purple")}
@@ -19,7 +20,7 @@ KIND_STYLE = {"ground": ("s", "tab:brown"), "facade": ("^", "tab:red"), "indoor"
 def write_report(rec: MissionRecord, path: str, title: str = "") -> None:
     """Draw the map and the score curve of a trial into `path` (PNG)."""
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6.5), gridspec_kw={"width_ratios": [1.3, 1]})
-    for name, b in (("tower", C.TOWER_BOX), ("extension", C.EXTENSION_BOX)):
+    for name, b in ((b.name, b.box) for b in ARENA.buildings):
         ax.add_patch(Rectangle((b[0], b[1]), b[3] - b[0], b[4] - b[1], facecolor="0.85", edgecolor="0.3"))
         ax.text((b[0] + b[3]) / 2, (b[1] + b[4]) / 2, name, ha="center", va="center", fontsize=8, color="0.3")
     for robot, tr in sorted(rec.tracks.items()):

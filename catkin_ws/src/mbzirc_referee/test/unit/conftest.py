@@ -4,4 +4,4 @@ import os
 import sys
 
 _SRC = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', '..')
-sys.path[:0] = [os.path.join(_SRC, pkg, 'src') for pkg in ('mbzirc_referee', 'mbzirc_agents', 'mbzirc_central_unit')]
+sys.path[:0] = [os.path.join(_SRC, pkg, 'src') for pkg in ('mbzirc_referee', 'mbzirc_arena')]

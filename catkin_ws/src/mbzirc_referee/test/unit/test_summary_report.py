@@ -78,7 +78,7 @@ def test_a_feed_without_a_pose_is_no_place():
     """An agent's feed before its UAL's first pose carries an empty PoseStamped: (0, 0, 0) is not where the
     robot is (it once made a 0.56 m "closest approach" of the UGV and a UAV taking off)."""
     from mbzirc_comm_objs.msg import AgentDataFeed
-    from mbzirc_central_unit.world_model import feed_position
+    from mbzirc_arena.messages import feed_position
     f = AgentDataFeed()
     assert feed_position(f) is None
     f.pose.header.frame_id = "arena"
