@@ -69,55 +69,104 @@ class SuiteConfig:
 
 
 class Monitor:
-    """The fault suite's eyes on the ground station: central-unit status, heartbeats, data feeds, tracks."""
+    """The fault suite's eyes on the ground station: central-unit status, heartbeats, data feeds, tracks,
+    reserved regions; and its hand on ``/clock`` (the clock faults)."""
+
+    # the periodic outputs of the system a clock fault must not silence (plus every robot's data_feed)
+    OUTPUTS = ("/central_unit/heartbeat", "/central_unit/status", "/estimated_objects")
 
     def __init__(self) -> None:
         import rospy
         from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
+        from rosgraph_msgs.msg import Clock
         from std_msgs.msg import Header, String
+        from visualization_msgs.msg import MarkerArray
         self.rospy = rospy
         self.lock = threading.Lock()
         self.history: list[tuple[float, dict[str, Any]]] = []
+        self.out_of_order_statuses = 0
         self.last_heartbeat_wall = 0.0
         self.last_feed_wall: dict[str, float] = {}
+        self.last_seen: dict[str, float] = {}      # output topic -> monotonic time of its last message
         self.last_tracks: Optional[int] = None
         self.last_tracks_wall = 0.0
         self.last_objects: dict[int, int] = {}     # id -> status of the last /estimated_objects
         self.objects_log: deque[tuple[float, dict[int, int]]] = deque(maxlen=600)  # (wall, id -> status)
+        self.objects_walls: deque[float] = deque(maxlen=5000)
+        self.regions_log: deque[tuple[float, frozenset]] = deque(maxlen=120)     # (wall, {agent/label})
+        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=100)         # clock faults only
         self.subs = [rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=10),
                      rospy.Subscriber("/central_unit/heartbeat", Header, self._on_heartbeat, queue_size=1),
-                     rospy.Subscriber("/estimated_objects", ObjectList, self._on_objects, queue_size=1)]
+                     rospy.Subscriber("/estimated_objects", ObjectList, self._on_objects, queue_size=1),
+                     rospy.Subscriber("/regions", MarkerArray, self._on_regions, queue_size=1)]
         for i in range(0, 10):
             self.subs.append(rospy.Subscriber(f"/mbzirc2020_{i}/data_feed", AgentDataFeed, self._on_feed,
                                               callback_args=str(i), queue_size=1))
 
+    def _seen(self, topic: str) -> float:
+        now = time.monotonic()
+        self.last_seen[topic] = now
+        return now
+
     def _on_status(self, msg) -> None:
+        self._seen("/central_unit/status")
         try:
             st = json.loads(msg.data)
         except ValueError:
             return
         with self.lock:
-            self.history.append((float(st.get("t", self.rospy.get_time())), st))
+            t = float(st.get("t", self.rospy.get_time()))
+            if self.history and t < self.history[-1][0] - 5.0:
+                # published during a clock fault (sim time back for a moment): not a point of the mission's
+                # timeline, where it would look like a status from before the earlier faults
+                self.out_of_order_statuses += 1
+                return
+            self.history.append((t, st))
 
     def _on_heartbeat(self, _msg) -> None:
-        self.last_heartbeat_wall = time.monotonic()
+        self.last_heartbeat_wall = self._seen("/central_unit/heartbeat")
 
     def _on_feed(self, _msg, robot: str) -> None:
-        self.last_feed_wall[robot] = time.monotonic()
+        self.last_feed_wall[robot] = self._seen(f"/mbzirc2020_{robot}/data_feed")
 
     def _on_objects(self, msg) -> None:
         objs = {int(o.id): int(o.status) for o in msg.objects}
-        now = time.monotonic()
+        now = self._seen("/estimated_objects")
         with self.lock:
             self.last_objects = objs
             self.objects_log.append((now, objs))
+            self.objects_walls.append(now)
         self.last_tracks = len(msg.objects)
         self.last_tracks_wall = now
+
+    def _on_regions(self, msg) -> None:
+        names = frozenset(m.ns for m in msg.markers if m.ns and m.action == m.ADD)
+        with self.lock:
+            self.regions_log.append((self._seen("/regions"), names))
 
     def first_objects_after(self, wall: float) -> Optional[dict[int, int]]:
         """The first /estimated_objects received after monotonic time ``wall`` (None if none yet)."""
         with self.lock:
             return next((o for t, o in self.objects_log if t > wall), None)
+
+    def regions_before(self, wall: float) -> Optional[frozenset]:
+        with self.lock:
+            return next((r for t, r in reversed(self.regions_log) if t <= wall), None)
+
+    def regions_after(self, wall: float) -> Optional[frozenset]:
+        with self.lock:
+            return next((r for t, r in self.regions_log if t > wall), None)
+
+    def objects_gaps(self, start: float, end: float) -> list[float]:
+        """Pauses (wall s) between /estimated_objects messages within [start, end], edges included."""
+        with self.lock:
+            times = [t for t in self.objects_walls if start <= t <= end]
+        pts = [start] + times + [end]
+        return [b - a for a, b in zip(pts, pts[1:])] if times else []
+
+    def flowing(self, since: float) -> list[str]:
+        """Outputs published since monotonic time ``since``."""
+        return sorted(t for t, w in self.last_seen.items() if w >= since and t != "/regions")
 
     def sim_time(self) -> float:
         return self.rospy.get_time()
@@ -128,9 +177,11 @@ class FaultSuite:
 
     def __init__(self, cfg: SuiteConfig) -> None:
         self.cfg = cfg
-        self.cfg.schedule = cfg.schedule or F.default_schedule(cfg.uavs, cfg.link_cut_s, cfg.start_s, cfg.spacing_s)
+        self.cfg.schedule = cfg.schedule or F.default_schedule(cfg.uavs, cfg.link_cut_s, cfg.start_s, cfg.spacing_s,
+                                                               ugv=cfg.ugv)
         self.log: list[str] = []
         self.lab: Optional[NetnsLab] = None
+        self.cut_robots: set[str] = set()
 
     def say(self, text: str) -> None:
         """One line of progress, wall-clock stamped (printed and kept for the report)."""
@@ -198,6 +249,24 @@ class FaultSuite:
         from mbzirc_robustness.graph import query_pid
         return query_pid(rosgraph.Master("/robustness_faults"), node, "/robustness_faults", timeout=2.0)
 
+    def _bus_inputs(self, node: str) -> set[str]:
+        import rosgraph
+        from mbzirc_robustness.graph import query_bus_info
+        return F.connected_inputs(query_bus_info(rosgraph.Master("/robustness_faults"), node,
+                                                 "/robustness_faults", timeout=2.0))
+
+    def _check_fire_answers(self, node: str) -> bool:
+        """The fire detector's CheckFire service (in its namespace) answers."""
+        import rospy
+        from mbzirc_comm_objs.srv import CheckFire
+        name = node.rsplit("/", 1)[0] + "/thermal_detection/fire_detected"
+        try:
+            rospy.wait_for_service(name, timeout=2.0)
+            rospy.ServiceProxy(name, CheckFire)()
+            return True
+        except Exception:  # noqa: BLE001 - not answering is the outcome
+            return False
+
     def _crash(self, f: F.Fault, mon: Monitor) -> None:
         pid = self._pid(f.target)
         if pid is None:
@@ -205,60 +274,175 @@ class FaultSuite:
             return
         tracks_before = mon.last_tracks or 0
         objects_before = dict(getattr(mon, "last_objects", {}) or {})
+        inputs_before = self._bus_inputs(f.target) if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS) else set()
         self.say(f"kill -9 {f.target} (pid {pid})" + (f", {tracks_before} tracks" if f.check == F.CHECK_TRACKS else ""))
         t_kill = time.monotonic()
+        regions_before = mon.regions_before(t_kill) if f.check == F.CHECK_REGIONS else None
         f.result["t_kill"] = mon.sim_time()
         try:
             os.kill(pid, 9)
         except ProcessLookupError:
             pass
         deadline = t_kill + self.cfg.recover_wall_s
-        new_pid, functional, tracks_verdict = None, False, None
+        new_pid, functional, verdict = None, False, None
         while time.monotonic() < deadline:
             time.sleep(0.5)
             if new_pid is None:
                 p = self._pid(f.target)
                 new_pid = p if p is not None and p != pid else None
-            if new_pid is not None:
-                functional = self._functional(f, mon, t_kill, tracks_before)
-                if f.check == F.CHECK_TRACKS:
-                    after = mon.first_objects_after(t_kill + 0.5)
-                    tracks_verdict = None if after is None else F.compare_tracks(objects_before, after)
-                    functional = functional and tracks_verdict is not None and tracks_verdict["same"]
-                    if after is not None:
-                        break                      # judged on the respawned estimator's first message
-                if functional:
-                    break
+                t_new = time.monotonic()
+            if new_pid is None:
+                continue
+            functional, verdict = self._functional(f, mon, t_kill, t_new, tracks_before, objects_before,
+                                                   inputs_before, regions_before)
+            if functional or (f.check in (F.CHECK_TRACKS, F.CHECK_REGIONS) and verdict is not None):
+                break                      # judged on the respawned node's first message
         took = time.monotonic() - t_kill
+        if f.check == F.CHECK_DECISIONS and new_pid is not None and functional:
+            # the heartbeat is back: now watch whether the central unit decides again (bounded in sim time)
+            verdict = self._watch_decisions(f, mon)
+            functional = verdict["ok"]
         if new_pid is None:
             detail = f"no new process named {f.target} within {self.cfg.recover_wall_s:.0f} s (respawn?)"
-        elif not functional and f.check == F.CHECK_TRACKS and tracks_verdict is not None:
-            detail = f"respawned (pid {new_pid}) but its tracks differ: {tracks_verdict['detail']}"
         elif not functional:
-            detail = f"respawned (pid {new_pid}) but {f.check} did not recover"
+            why = (verdict or {}).get("detail") or f"{f.check} did not recover"
+            detail = f"respawned (pid {new_pid}) but {why}"
         else:
-            detail = f"respawned (pid {new_pid}) and {f.check} recovered in {took:.1f} s"
+            detail = f"respawned (pid {new_pid}) and {f.check} recovered in {took:.1f} s" + (
+                f" ({verdict['detail']})" if verdict and verdict.get("detail") else "")
         f.result.update({"survived": new_pid is not None and functional, "detail": detail, "old_pid": pid,
                          "new_pid": new_pid, "recovery_wall_s": round(took, 1)})
+        if verdict is not None:
+            f.result[f"{f.check}_check"] = verdict
         if f.check == F.CHECK_TRACKS:
             f.result.update(tracks_before=tracks_before, tracks_after=mon.last_tracks)
-            if tracks_verdict is not None:
-                f.result.update(tracks_check=tracks_verdict)
+            if verdict is not None:
+                f.result["tracks_check"] = verdict
         self.say(f"{f.target}: {detail}")
 
-    @staticmethod
-    def _functional(f: F.Fault, mon: Monitor, t_kill: float, tracks_before: int) -> bool:
+    def _functional(self, f: F.Fault, mon: Monitor, t_kill: float, t_new: float, tracks_before: int,
+                    objects_before: dict, inputs_before: set, regions_before) -> tuple[bool, Optional[dict]]:
+        """(recovered, verdict details) of a respawned node, by what it must do again (F.CHECK_*)."""
         if f.check == F.CHECK_HEARTBEAT:
-            return mon.last_heartbeat_wall > t_kill + 0.5
+            return mon.last_heartbeat_wall > t_kill + 0.5, None
+        if f.check == F.CHECK_DECISIONS:
+            return mon.last_heartbeat_wall > t_kill + 0.5 and mon.last_seen.get("/central_unit/status", 0) > t_kill + 0.5, None
         if f.check == F.CHECK_DATA_FEED:
-            return mon.last_feed_wall.get(f.robot or "", 0.0) > t_kill + 0.5
+            return mon.last_feed_wall.get(f.robot or "", 0.0) > t_kill + 0.5, None
         if f.check == F.CHECK_TRACKS:
-            return mon.last_tracks_wall > t_kill + 0.5 and (mon.last_tracks or 0) >= tracks_before
-        return True
+            after = mon.first_objects_after(t_kill + 0.5)
+            if after is None:
+                return False, None
+            v = F.compare_tracks(objects_before, after)
+            return v["same"] and (mon.last_tracks or 0) >= tracks_before, v
+        if f.check == F.CHECK_REGIONS:
+            after = mon.regions_after(t_new)
+            if after is None:
+                return False, None
+            if regions_before is None:
+                return True, {"detail": "no /regions seen before the kill: kept reservations not checked"}
+            v = F.compare_regions(regions_before, after)
+            return v["same"], v
+        if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS):
+            v = F.judge_io_restored(inputs_before, self._bus_inputs(f.target))
+            if f.check == F.CHECK_DETECTIONS:
+                v["check_fire_answers"] = self._check_fire_answers(f.target)
+                if not v["check_fire_answers"]:
+                    v["ok"], v["detail"] = False, v["detail"] + "; its CheckFire service does not answer"
+            return v["ok"], v
+        return True, None
+
+    def _watch_decisions(self, f: F.Fault, mon: Monitor) -> dict[str, Any]:
+        """Wait (at most DECISION_WITHIN_S sim s after its first status, 3 x that in wall time) for the
+        restarted central unit to decide again; then judge its status history since the kill."""
+        t_kill = f.result["t_kill"]
+        wall_limit = time.monotonic() + 3.0 * F.DECISION_WITHIN_S
+        while time.monotonic() < wall_limit:
+            with mon.lock:
+                hist = list(mon.history)
+            v = F.judge_decisions(hist, t_kill, mon.sim_time())
+            if v["ok"] and v.get("first_decision_after_s") is not None:
+                return v
+            after = [t for t, _ in hist if t > t_kill]
+            if after and mon.sim_time() - after[0] > F.DECISION_WITHIN_S + 5.0:
+                break
+            time.sleep(1.0)
+        with mon.lock:
+            hist = list(mon.history)
+        return F.judge_decisions(hist, t_kill, mon.sim_time())
+
+    def _expected_outputs(self, mon: Monitor, t_fault: float) -> list[str]:
+        """The periodic outputs flowing in the 5 s before a fault, minus those of robots whose link is cut."""
+        cut = {f"/mbzirc2020_{r}/data_feed" for r in self.cut_robots}
+        return [o for o in mon.flowing(t_fault - 5.0) if o not in cut]
+
+    def _clock_fault(self, f: F.Fault, mon: Monitor) -> None:
+        """One /clock message ``jump_s`` back (KIND_CLOCK_JUMP), or /clock counting again from 0 for 1 s
+        (KIND_SIM_RESTART: what a restarted simulator sends; ual_sim itself is required and keeps its world,
+        so this emulates the restart's clock only); then every periodic output must be published again."""
+        from rosgraph_msgs.msg import Clock
+        import rospy
+        t_fault = time.monotonic()
+        expected = self._expected_outputs(mon, t_fault)
+        now = mon.sim_time()
+        f.result["t_fault"] = now
+        if f.kind == F.KIND_CLOCK_JUMP:
+            mon.clock_pub.publish(Clock(clock=rospy.Time.from_sec(max(now - (f.jump_s or 10.0), 0.001))))
+            self.say(f"/clock: one message {f.jump_s or 10.0:.0f} s in the past (sim t={now:.0f} s)")
+        else:
+            self.say(f"/clock: counting again from 0 for 1 s (simulator restart, sim t={now:.0f} s)")
+            for k in range(1, 21):
+                mon.clock_pub.publish(Clock(clock=rospy.Time.from_sec(0.05 * k)))
+                time.sleep(0.05)
+        time.sleep(min(self.cfg.recover_wall_s, 20.0))
+        v = F.judge_outputs(dict(mon.last_seen), time.monotonic() - 10.0, expected)
+        v["expected_outputs"] = expected
+        f.result.update({"survived": v["ok"], "detail": v["detail"], "outputs_check": v})
+        self.say(f"{f.kind}: {v['detail']}")
+
+    def _flood(self, f: F.Fault, mon: Monitor) -> None:
+        """Publish ObjectDetectionList on robot ``target``'s sensed_objects at ``rate_hz`` for ``duration_s``
+        wall seconds, each with one fire far outside the arena at a new place (never confirmed: each is a
+        new tentative track); /estimated_objects must keep flowing during it, every output after it."""
+        import random
+        import rospy
+        from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
+        topic = f"/mbzirc2020_{f.target}/sensed_objects"
+        pub = rospy.Publisher(topic, ObjectDetectionList, queue_size=1000)
+        time.sleep(2.0)                                         # let the estimator connect
+        expected = self._expected_outputs(mon, time.monotonic())
+        rng = random.Random(7)
+        period = 1.0 / (f.rate_hz or 1000.0)
+        start = time.monotonic()
+        end = start + (f.duration_s or 10.0)
+        sent, nxt = 0, start
+        self.say(f"flooding {topic} at {f.rate_hz or 1000.0:.0f} Hz for {f.duration_s or 10.0:.0f} s")
+        while time.monotonic() < end:
+            d = ObjectDetection(type=1)
+            d.header.frame_id = "arena"
+            d.pose.pose.position.x = rng.uniform(1000.0, 3000.0)
+            d.pose.pose.position.y = rng.uniform(1000.0, 3000.0)
+            d.pose.pose.orientation.w = 1.0
+            pub.publish(ObjectDetectionList(agent_id="flood", objects=[d]))
+            sent += 1
+            nxt += period
+            delay = nxt - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+        took = time.monotonic() - start
+        gaps = mon.objects_gaps(start, time.monotonic())
+        time.sleep(10.0)
+        after = F.judge_outputs(dict(mon.last_seen), time.monotonic() - 8.0, expected)
+        v = F.judge_flood(gaps, outputs_after=after)
+        v.update(sent=sent, achieved_rate_hz=round(sent / max(took, 1e-6)))
+        f.result.update({"survived": v["ok"], "detail": v["detail"] + f" ({sent} messages, "
+                         f"{v['achieved_rate_hz']} Hz achieved)", "flood_check": v})
+        self.say(f"flood: {f.result['detail']}")
 
     def _cut(self, f: F.Fault, now: float) -> None:
         host = "ugv" if f.target == "0" else f"uav{f.target}"
         self.lab.set_link(host, False)
+        self.cut_robots.add(str(f.target))
         f.result = {"t_cut": now, "wall_cut": datetime.now().isoformat(timespec="milliseconds")}
         self.say(f"link of {host} cut" + (f" for {f.duration_s:.0f} s" if f.duration_s else " for good"))
 
@@ -297,17 +481,26 @@ class FaultSuite:
                 fh.write(json.dumps({"t": t, "status": st}) + "\n")
         wall_end = getattr(self, "wall_stop", None) or datetime.now()  # before the hosts were torn down
         cu_kills = [f.result["t_kill"] for f in self.cfg.schedule
-                    if f.kind == F.KIND_CRASH and f.check == F.CHECK_HEARTBEAT and "t_kill" in f.result]
+                    if f.kind == F.KIND_CRASH and f.check in (F.CHECK_HEARTBEAT, F.CHECK_DECISIONS)
+                    and "t_kill" in f.result]
+        t_end = getattr(self, "t_stop", None)
         for f in self.cfg.schedule:
             if f.kind in (F.KIND_LINK_CUT, F.KIND_LINK_CUT_PERMANENT) and "t_cut" in f.result:
                 t_restore = f.result.get("t_restore")
                 f.result.update(F.evaluate_link_cut(history, f.target, f.result["t_cut"], t_restore,
-                                                    central_unit_kills=cu_kills))
+                                                    central_unit_kills=cu_kills, t_end=t_end))
                 self._judge_agent(f, history, wall_end)
         rep = robustness_report(fuzz, [F.scenario_entry(f) for f in self.cfg.schedule], summary,
                                 robots_lost=F.robots_lost(history))
         if summary is None:
             rep["failures"].append("no mission summary: the mission recorder never finished (mission stopped?)")
+        floor = F.mission_floor("short" if self.cfg.stop_when_done else "long")
+        perm = [f.target for f in self.cfg.schedule if f.kind == F.KIND_LINK_CUT_PERMANENT]
+        rep["mission_floor"] = dict(floor, schedule="short" if self.cfg.stop_when_done else "long",
+                                    expected_lost=perm)
+        if summary is not None:
+            rep["failures"] += F.judge_mission(summary, rep["robots_lost"] or [], floor, expected_lost=perm)
+        rep["out_of_order_statuses"] = mon.out_of_order_statuses if mon else 0
         if error:
             rep["failures"].append(f"suite error: {error}")
         rep["checks_passed"] = sum(1 for sc in rep["scenarios"] if sc["survived"])
@@ -367,8 +560,10 @@ class FaultSuite:
             for f in [f for f in pending if f.at_s <= now]:
                 pending.remove(f)
                 f.done = True
-                if f.kind == F.KIND_CRASH:  # recovery is watched in the background: the timeline runs on
-                    th = threading.Thread(target=self._crash, args=(f, mon), daemon=True)
+                background = {F.KIND_CRASH: self._crash, F.KIND_CLOCK_JUMP: self._clock_fault,
+                              F.KIND_SIM_RESTART: self._clock_fault, F.KIND_FLOOD: self._flood}
+                if f.kind in background:  # recovery is watched in the background: the timeline runs on
+                    th = threading.Thread(target=background[f.kind], args=(f, mon), daemon=True)
                     th.start()
                     self.threads.append(th)
                 else:
@@ -383,6 +578,7 @@ class FaultSuite:
                 if mon.sim_time() >= t_restore:
                     host = "ugv" if f.target == "0" else f"uav{f.target}"
                     self.lab.set_link(host, True)
+                    self.cut_robots.discard(str(f.target))
                     f.result["t_restore"] = mon.sim_time()
                     f.result["wall_restore"] = datetime.now().isoformat(timespec="milliseconds")
                     self.say(f"link of {host} restored")
@@ -398,8 +594,9 @@ class FaultSuite:
         else:
             self.say("ground-station launch ended (mission over)")
         self.wall_stop = datetime.now()
+        self.t_stop = mon.sim_time()
         for th in self.threads:
-            th.join(self.cfg.recover_wall_s + 5.0)
+            th.join(3.0 * F.DECISION_WITHIN_S + self.cfg.recover_wall_s + 5.0)
         for f in pending:
             f.result = {"survived": False, "detail": "not run: the mission ended first"}
 

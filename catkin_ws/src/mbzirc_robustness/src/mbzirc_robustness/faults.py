@@ -17,12 +17,26 @@ ROSOUT_LINE = re.compile(r"^\[rosout\]\[(\w+)\] (\d{4}-\d\d-\d\d \d\d:\d\d:\d\d)
 KIND_LINK_CUT = "link_cut"
 KIND_LINK_CUT_PERMANENT = "link_cut_permanent"
 KIND_CRASH = "crash"
+KIND_CLOCK_JUMP = "clock_jump"          # one /clock message ``jump_s`` in the past (a bag with --clock, an NTP step)
+KIND_SIM_RESTART = "sim_restart"        # /clock starts again from 0 for a moment (the simulator restarted)
+KIND_FLOOD = "flood"                    # a publisher floods a robot's sensed_objects at ``rate_hz``
+KIND_TASK_EXCEPTION = "task_exception"  # an exception raised inside a robot's running task
+
+# a floor released while its robot is silent must be taken again within this (sim s), unless nothing is left
+RETAKE_WITHIN_S = 90.0
+# the central unit must make a decision (an assignment changes) within this after its restart (sim s)
+DECISION_WITHIN_S = 90.0
 
 # what must come back after a kill -9, per kind of node (checked by the runner)
 CHECK_HEARTBEAT = "heartbeat"          # /central_unit/heartbeat published again
 CHECK_DATA_FEED = "data_feed"          # the robot's data_feed published again
 CHECK_TRACKS = "tracks"                # /estimated_objects again, with at least the tracks it had before
 CHECK_PROCESS = "process"              # a new process answers under the same node name
+CHECK_DECISIONS = "decisions"          # central unit: heartbeat and status again, and its decisions go on
+CHECK_DETECTIONS = "detections"        # fire detector: inputs connected again and its CheckFire service answers
+CHECK_INPUTS = "inputs"                # every input it received before is connected again
+CHECK_REGIONS = "regions"              # region manager: every reservation it held is there after the respawn
+CHECK_OUTPUTS = "outputs"              # every periodic output of the system published again (clock faults)
 
 
 @dataclass
@@ -30,8 +44,10 @@ class Fault:
     """One scheduled fault, ``at_s`` sim seconds after the mission started.
 
     Args:
-        kind: KIND_LINK_CUT (restored after ``duration_s``), KIND_LINK_CUT_PERMANENT or KIND_CRASH.
-        target: robot id (link cuts) or node name (crashes).
+        kind: KIND_LINK_CUT (restored after ``duration_s``), KIND_LINK_CUT_PERMANENT, KIND_CRASH,
+            KIND_CLOCK_JUMP, KIND_SIM_RESTART, KIND_FLOOD (for ``duration_s`` at ``rate_hz``) or
+            KIND_TASK_EXCEPTION.
+        target: robot id (link cuts, flood, task exception), node name (crashes), '/clock' (clock faults).
         check: for crashes, what must come back (CHECK_*).
         robot: for crashes of per-robot nodes, the robot id whose data_feed is checked.
     """
@@ -40,6 +56,8 @@ class Fault:
     target: str
     at_s: float
     duration_s: Optional[float] = None
+    jump_s: Optional[float] = None      # KIND_CLOCK_JUMP: how far back (s)
+    rate_hz: Optional[float] = None     # KIND_FLOOD
     check: str = CHECK_PROCESS
     robot: Optional[str] = None
     done: bool = False
@@ -47,24 +65,143 @@ class Fault:
 
 
 def default_schedule(uavs: int = 3, link_cut_s: float = 60.0, start_s: float = 40.0,
-                     spacing_s: float = 25.0) -> list[Fault]:
+                     spacing_s: float = 25.0, ugv: bool = True) -> list[Fault]:
     """The issue's scenarios, link cuts first (judged on an otherwise healthy system): UAV 2's link cut
-    for ``link_cut_s`` and UAV 3's for good; once UAV 2 is back, kill -9 of a detector, an agent, the
-    estimator and the central unit (last: without it nothing else can be judged). With fewer UAVs the cuts
-    go to the last UAVs present."""
+    for ``link_cut_s`` and UAV 3's for good; once UAV 2 is back, one every ``spacing_s``: kill -9 of the
+    fire detector (of the UAV cut for a while: back on its feet), of UAV 1's agent, of the estimator, of the
+    region manager, of that UAV's circle detector (water UAVs only) and of the UGV agent, a /clock jump 10 s back, a 1 kHz flood of sensed_objects (10 s), the simulator's clock
+    restarting, and kill -9 of the central unit last (without it nothing else can be judged). With fewer
+    UAVs the cuts go to the last UAVs present."""
     cut_temp = str(min(2, uavs))
     cut_perm = str(uavs) if uavs >= 3 else None
     sched = [Fault(KIND_LINK_CUT, cut_temp, start_s, duration_s=link_cut_s)]
     if cut_perm:
         sched.append(Fault(KIND_LINK_CUT_PERMANENT, cut_perm, start_s + spacing_s))
     t = start_s + link_cut_s + spacing_s
-    for node, check, robot in ((f"/mbzirc2020_{cut_temp}/fire_detector", CHECK_PROCESS, cut_temp),
-                               ("/mbzirc2020_1/agent", CHECK_DATA_FEED, "1"),
-                               ("/object_estimator", CHECK_TRACKS, None),
-                               ("/central_unit", CHECK_HEARTBEAT, None)):
-        sched.append(Fault(KIND_CRASH, node, t, check=check, robot=robot))
+    steps: list[Fault] = [
+        Fault(KIND_CRASH, f"/mbzirc2020_{cut_temp}/fire_detector", 0, check=CHECK_DETECTIONS, robot=cut_temp),
+        Fault(KIND_CRASH, "/mbzirc2020_1/agent", 0, check=CHECK_DATA_FEED, robot="1"),
+        Fault(KIND_CRASH, "/object_estimator", 0, check=CHECK_TRACKS),
+        Fault(KIND_CRASH, "/region_manager", 0, check=CHECK_REGIONS),
+        Fault(KIND_CRASH, f"/mbzirc2020_{cut_temp}/circle_detector", 0, check=CHECK_INPUTS, robot=cut_temp),
+        Fault(KIND_CLOCK_JUMP, "/clock", 0, jump_s=10.0, check=CHECK_OUTPUTS),
+        Fault(KIND_FLOOD, "1", 0, duration_s=10.0, rate_hz=1000.0, check=CHECK_OUTPUTS),
+        Fault(KIND_SIM_RESTART, "/clock", 0, check=CHECK_OUTPUTS),
+    ]
+    if ugv:
+        steps.insert(5, Fault(KIND_CRASH, "/mbzirc2020_0/agent", 0, check=CHECK_DATA_FEED, robot="0"))
+    steps.append(Fault(KIND_CRASH, "/central_unit", 0, check=CHECK_DECISIONS))
+    for f in steps:
+        f.at_s = t
+        sched.append(f)
         t += spacing_s
     return sched
+
+
+def mission_floor(schedule: str) -> dict[str, Any]:
+    """What the mission must still achieve under a schedule's faults (the suite fails below it).
+
+    ``short`` (make test: faults from sim 30 s every 15 s, stopped once every fault is judged, about
+    300-400 sim s) and ``long`` (make test-faults: 600 sim s). Robots lost: only the UAV cut for good may be
+    dead at the end. Fires: measured on this machine with these faults (see the README's reliability table);
+    the floor is set below the worst run seen so that a healthy run passes and a mission that stops passes
+    no fire at all."""
+    floors = {"short": {"min_fires_out": 1, "max_robots_lost": 1},
+              "long": {"min_fires_out": 2, "max_robots_lost": 1}}
+    return dict(floors[schedule])
+
+
+def judge_mission(summary: Optional[dict[str, Any]], lost: list[str], floor: dict[str, Any],
+                  expected_lost: Iterable[str] = ()) -> list[str]:
+    """Failures of the mission as a whole: fewer fires put out than ``floor['min_fires_out']``, more robots
+    lost than ``floor['max_robots_lost']`` or a robot lost that no fault was meant to take."""
+    problems = []
+    if summary is None:
+        return ["no mission summary: fires put out unknown"]
+    out = summary.get("fires_extinguished")
+    if out is None or out < floor["min_fires_out"]:
+        problems.append(f"fires put out {out}/{summary.get('fires_total')} below the floor of "
+                        f"{floor['min_fires_out']} for this schedule")
+    unexpected = sorted(set(lost) - set(map(str, expected_lost)))
+    if len(lost) > floor["max_robots_lost"] or unexpected:
+        problems.append(f"robots lost {lost} (allowed: at most {floor['max_robots_lost']}, "
+                        f"only {sorted(map(str, expected_lost))})")
+    return problems
+
+
+def judge_decisions(history: list[tuple[float, dict[str, Any]]], t_kill: float, t_end: float,
+                    within_s: float = DECISION_WITHIN_S, max_gap_s: float = 15.0) -> dict[str, Any]:
+    """Verdict on a central unit restart from its status history: statuses come again and keep coming (no
+    gap over ``max_gap_s`` after the first one, until ``t_end``), and it decides again: some robot's task or
+    a floor's owner changes within ``within_s`` of its first status (unless every fire is out). A heartbeat
+    alone proves only that a process runs, not that the work goes on."""
+    after = [(t, s) for t, s in history if t > t_kill]
+    if not after:
+        return {"ok": False, "detail": "no status from the central unit after the restart"}
+    t0 = after[0][0]
+    times = [t for t, _ in after] + [t_end]
+    gap = max((b - a for a, b in zip(times, times[1:])), default=0.0)
+
+    def decisions(s: dict[str, Any]) -> tuple:
+        return (tuple(sorted((r, a.get("task", "")) for r, a in (s.get("agents") or {}).items())),
+                tuple(sorted((s.get("floor_owner") or {}).items())), tuple(sorted((s.get("indoor_owner") or {}).items())))
+
+    first = decisions(after[0][1])
+    changed = next((t for t, s in after if decisions(s) != first), None)
+    problems = []
+    if gap > max_gap_s:
+        problems.append(f"its status stopped again ({gap:.0f} s without one)")
+    if changed is None or changed - t0 > within_s:
+        if not _all_fires_out(after[-1][1]) and t_end - t0 >= within_s:
+            problems.append(f"no decision (task or floor owner change) within {within_s:.0f} s of its restart")
+    return {"ok": not problems, "first_status_after_s": round(t0 - t_kill, 1),
+            "first_decision_after_s": None if changed is None else round(changed - t_kill, 1),
+            "max_status_gap_s": round(gap, 1), "detail": "; ".join(problems) or "status and decisions go on"}
+
+
+def judge_outputs(last_seen: dict[str, float], t_fault: float, expected: Iterable[str],
+                  settle_s: float = 1.0) -> dict[str, Any]:
+    """Verdict on a clock fault: every output in ``expected`` (topic names) was published again after the
+    fault (``last_seen``: topic -> monotonic time of its last message, read once the recovery window
+    ended; ``t_fault`` the monotonic time of the fault)."""
+    silent = sorted(o for o in expected if last_seen.get(o, 0.0) <= t_fault + settle_s)
+    return {"ok": not silent, "silent_outputs": silent,
+            "detail": f"silent after the fault: {silent}" if silent else "every periodic output published again"}
+
+
+def judge_flood(gaps_during: list[float], max_gap_s: float = 2.0, outputs_after: Optional[dict[str, Any]] = None
+                ) -> dict[str, Any]:
+    """Verdict on a flood of sensed_objects: /estimated_objects never paused more than ``max_gap_s`` (wall)
+    during it, and every periodic output published after it."""
+    worst = max(gaps_during, default=float("inf"))
+    problems = []
+    if worst > max_gap_s:
+        problems.append(f"/estimated_objects paused {worst:.1f} s during the flood (max {max_gap_s:.0f} s)")
+    if outputs_after is not None and not outputs_after["ok"]:
+        problems.append(outputs_after["detail"])
+    return {"ok": not problems, "worst_gap_s": None if worst == float("inf") else round(worst, 2),
+            "detail": "; ".join(problems) or "estimated objects kept flowing"}
+
+
+def connected_inputs(bus_info: list) -> set[str]:
+    """Topics a node receives from at least one peer, from its ``getBusInfo`` answer."""
+    return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] in ("i", "b") and e[4] != "/clock"}
+
+
+def judge_io_restored(before: set[str], after: set[str]) -> dict[str, Any]:
+    """Verdict on a restarted node's wiring: every topic it received before the kill it receives again (a
+    new process that subscribed to nothing, or whose publishers never connected, does no work)."""
+    missing = sorted(before - after)
+    return {"ok": not missing, "inputs_before": sorted(before), "inputs_missing": missing,
+            "detail": f"inputs not connected again: {missing}" if missing else "every input connected again"}
+
+
+def compare_regions(before: Iterable[str], after: Iterable[str]) -> dict[str, Any]:
+    """Verdict on a region manager restart: the reservations (``agent/label``) of its last /regions before
+    the kill are all in its first /regions after the respawn (nobody could free them meanwhile)."""
+    missing = sorted(set(before) - set(after))
+    return {"same": not missing, "before": sorted(before), "missing": missing,
+            "detail": f"reservations lost: {missing}" if missing else "every reservation kept"}
 
 
 def _agent(status: dict[str, Any], robot: str) -> dict[str, Any]:
@@ -86,7 +223,8 @@ def _owner(status: dict[str, Any], floor: str) -> Optional[str]:
 
 def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t_cut: float,
                       t_restore: Optional[float], max_gap_s: float = 15.0,
-                      central_unit_kills: Iterable[float] = ()) -> dict[str, Any]:
+                      central_unit_kills: Iterable[float] = (), t_end: Optional[float] = None,
+                      retake_within_s: float = RETAKE_WITHIN_S) -> dict[str, Any]:
     """Verdict on one link cut from the central unit's status history [(sim time, status), ...].
 
     Survived when: the central unit marked the robot silent, kept running through the cut (no status gap
@@ -95,6 +233,12 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     for a temporary cut, saw the robot alive again after the restore. Whether it got work again is reported.
     A status gap that spans one of ``central_unit_kills`` (sim times of a scheduled kill -9 of the central
     unit) is that fault's, judged by its own verdict, not this cut's.
+
+    ``t_end``: sim time the watching ended (default: the last status). The silence between the last status
+    and then counts as a gap: a central unit that sent one status after the cut and went silent failed.
+    A floor released while the robot was silent must be taken again (by any robot) within
+    ``retake_within_s`` of its release, unless every fire of the status is put out or the watching ended
+    first: released and never retaken is work dropped, not reassigned.
     """
     robot = str(robot)
     before = [s for t, s in history if t <= t_cut]
@@ -103,11 +247,13 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     window_end = t_restore if t_restore is not None else float("inf")
     t_noticed = next((t for t, s in after if t <= window_end + 5.0 and _agent(s, robot)
                       and not _agent(s, robot).get("alive", True)), None)
-    times = [t_cut] + [t for t, _ in after if t <= min(window_end, after[-1][0] if after else t_cut)]
+    t_last = t_end if t_end is not None else (after[-1][0] if after else t_cut)
+    times = [t_cut] + [t for t, _ in after if t <= min(window_end, t_last)] + [min(window_end, t_last)]
     kills = list(central_unit_kills)
     gaps = [b - a for a, b in zip(times, times[1:]) if not any(a <= k <= b for k in kills)]
     went_on = bool(after) and (max(gaps) if gaps else 0.0) <= max_gap_s
-    reassigned, stuck, kept = [], [], []
+    reassigned, stuck, kept, dropped = [], [], [], []
+    retakes: dict[str, float] = {}
     silent = [s for t, s in after if t_noticed is not None and t_noticed <= t <= window_end]
     # robots that were alive and idle at some point while this one was silent: they could have taken its floor
     free = sorted({r for s in silent for r, a in (s.get("agents") or {}).items()
@@ -118,7 +264,17 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
         if any(_owner(s, fl) not in (None, robot) for s in later):
             reassigned.append(fl)
         elif later and _owner(later[-1], fl) is None:
-            reassigned.append(fl)  # released: no longer anyone's job (done, or next search pending)
+            # released: fine only when someone takes it again in time (or nothing is left to do there)
+            t_rel = next((t for t, s in after if t >= t_noticed and _owner(s, fl) is None), None)
+            retaken = next((t for t, s in after if t_rel is not None and t > t_rel and _owner(s, fl) is not None), None)
+            horizon = t_last
+            if retaken is not None and retaken - t_rel <= retake_within_s:
+                reassigned.append(fl)
+                retakes[fl] = round(retaken - t_rel, 1)
+            elif _all_fires_out(after[-1][1]) or horizon - t_rel < retake_within_s:
+                reassigned.append(fl)  # nothing left to do there, or too little time watched to tell
+            else:
+                dropped.append(fl)
         elif not free:
             kept.append(fl)  # nobody was free to take it: not the central unit's fault
         else:
@@ -128,6 +284,7 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
                            "owner_timeline": timeline,
                            "floors_owned_at_cut": owned, "floors_reassigned": reassigned,
                            "floors_not_reassigned": stuck, "floors_kept_no_free_robot": kept,
+                           "floors_released_not_retaken": dropped, "retaken_after_s": retakes,
                            "free_robots_during_silence": free, "mission_went_on": went_on}
     problems = []
     if t_noticed is None:
@@ -136,6 +293,8 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
         problems.append("central unit status stopped during the cut")
     if stuck:
         problems.append(f"floors still owned by the silent robot although {free} were free: {stuck}")
+    if dropped:
+        problems.append(f"floors released but not taken again within {retake_within_s:.0f} s: {dropped}")
     if t_restore is not None:
         back = [(t, s) for t, s in history if t > t_restore and _agent(s, robot).get("alive")]
         res["t_back"] = back[0][0] if back else None
@@ -145,6 +304,13 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     res["survived"] = not problems
     res["detail"] = "; ".join(problems) if problems else "ok"
     return res
+
+
+def _all_fires_out(status: dict[str, Any]) -> bool:
+    """Every fire the central unit knows is put out (nothing left to assign)."""
+    fires = status.get("fires") or []
+    return bool(fires) and all(str(f.get("status", "")).upper() in ("EXTINGUISHED", "INACTIVE", "4", "0")
+                               for f in fires)
 
 
 def owner_changes(history: list[tuple[float, dict[str, Any]]], floor: str, since: float) -> list[list[Any]]:
@@ -230,7 +396,9 @@ def agent_log_window(lines: Iterable[str], start: datetime, end: datetime, keep:
 # what an agent logs when it reacts to the central unit's heartbeat (mbzirc_agents robot_agent / uav_agent)
 AGENT_REACTIONS = {
     "heartbeat_lost": re.compile(r"heartbeat lost", re.I),
-    "return_home": re.compile(r"go_home|cannot go home", re.I),
+    # the go-home task starting (smach's transition out of the idle state), or the agent saying why it
+    # cannot: never a line that merely names the task ("go_home_and_refill failed", "[go_home_and_refill/..]")
+    "return_home": re.compile(r"transitioning 'DEFAULT':'go_home_and_refill'-->|cannot go home", re.I),
     "heartbeat_back": re.compile(r"heartbeat back", re.I),
     # the running task ended (smach: back to the idle state), whatever its outcome
     "task_ended": re.compile(r"transitioning '(?!DEFAULT')[^']+':'[^']+'-->'DEFAULT'"),
@@ -252,9 +420,9 @@ def judge_agent_reaction(log: dict[str, Any], wall_cut: datetime, wall_restore: 
     started going home (or said why it could not) ``lost_after_s + home_after_s`` after the cut, or, when
     a task was running (``busy_at_cut``), once that task ended (the watchdog preempts it, and goes home only
     when no task runs) - within ``slack_s``. A task that never ends while cut (blocked in calls to the
-    unreachable ground station: in simulation the autopilot and pump are the simulator's, there; each call
-    only gives up after rospy's 60 s socket timeout) leaves the return home unverified: reported in
-    ``agent_unverified``, not a failure. After a restore the agent must log that the heartbeat is back.
+    unreachable ground station) is a failure: every call of an agent is bounded in wall time, so its task
+    must end. After a restore the agent must log that the heartbeat is back. ``agent_unverified`` stays
+    in the result (always empty) for readers of older reports.
     Returns {"agent_ok", "agent_problems", "agent_checked", "agent_unverified"}.
     """
     ev = {k: [datetime.fromisoformat(x) for x in v] for k, v in (log.get("events") or {}).items()}
@@ -277,8 +445,10 @@ def judge_agent_reaction(log: dict[str, Any], wall_cut: datetime, wall_restore: 
         ended = sorted((t - wall_cut).total_seconds() for t in ev.get("task_ended", []) if t >= wall_cut)
         free_at = max(home_at, ended[0]) if busy_at_cut and ended else (None if busy_at_cut else home_at)
         if free_at is None:
-            unverified.append("return home: the task it was running never ended while cut (blocked in calls "
-                              "to the unreachable ground station), so the watchdog could not start it")
+            # every agent call is bounded in wall time (mbzirc_agents bounded_call): a task that never ends
+            # while cut is a stuck agent, not an unverifiable case
+            checked.append("return_home")
+            problems.append("its task never ended while cut, so it never started going home")
         elif (down_until - wall_cut).total_seconds() >= free_at + slack_s:
             checked.append("return_home")
             # not before the watchdog could order it: a go-home task cut short by the loss does not count

@@ -171,11 +171,16 @@ def robustness_report(fuzz: dict[str, Any] | None, scenarios: list[dict[str, Any
     """
     links = [s for s in scenarios if s["kind"].startswith("link_cut")]
     crashes = [s for s in scenarios if s["kind"] == "crash"]
+    others = [s for s in scenarios if s not in links and s not in crashes]
     out: dict[str, Any] = {
         "link_losses": len(links),
         "link_losses_survived": sum(1 for s in links if s["survived"]),
         "crashes": len(crashes),
         "crashes_survived": sum(1 for s in crashes if s["survived"]),
+        "other_faults": len(others),                    # clock jump, simulator restart, flood, ...
+        "other_faults_survived": sum(1 for s in others if s["survived"]),
+        "recovery_wall_s": {f"{s['kind']} {s['target']}": s["recovery_wall_s"] for s in scenarios
+                            if s.get("recovery_wall_s") is not None},
         "malformed_inputs_tried": fuzz["summary"]["malformed_inputs_tried"] if fuzz else 0,
         "fuzz_nodes_died": [d["node"] for d in fuzz["summary"]["nodes_died"]] if fuzz else [],
         "fuzz_silent_nodes": fuzz["summary"]["silent_nodes"] if fuzz else [],
@@ -198,12 +203,14 @@ def format_robustness(rep: dict[str, Any]) -> str:
     lines = [
         f"link losses survived: {rep['link_losses_survived']}/{rep['link_losses']}",
         f"crashes survived:     {rep['crashes_survived']}/{rep['crashes']}",
+        f"other faults survived: {rep.get('other_faults_survived', 0)}/{rep.get('other_faults', 0)}",
         f"malformed inputs tried: {rep['malformed_inputs_tried']} (nodes died: {rep['fuzz_nodes_died'] or 'none'})",
         f"robots lost:          {rep['robots_lost']}",
         f"fires put out:        {rep['fires_put_out']}/{rep['fires_total']}",
         f"collisions:           {rep['collisions'] if rep['collisions'] is not None else 'unknown'}",
     ]
     for sc in rep["scenarios"]:
+        lines.append(f"  {'ok  ' if sc['survived'] else 'FAIL'} {sc['kind']} {sc['target']}: {sc.get('detail', '')}")
         log = sc.get("agent_log_during_cut")
         if log is not None:
             lines.append(f"  {sc['kind']} {sc['target']}: its agent logged {log['lines']} lines while cut, "

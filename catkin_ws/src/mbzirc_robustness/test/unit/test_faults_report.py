@@ -13,23 +13,31 @@ def status(t, alive, owners, tasks=None, indoor=None):
 def test_default_schedule_has_every_fault_kind_once():
     sched = F.default_schedule(uavs=3)
     kinds = [f.kind for f in sched]
-    assert kinds.count(F.KIND_CRASH) == 4
+    assert kinds.count(F.KIND_CRASH) == 7
     assert kinds.count(F.KIND_LINK_CUT) == 1 and kinds.count(F.KIND_LINK_CUT_PERMANENT) == 1
+    for k in (F.KIND_CLOCK_JUMP, F.KIND_SIM_RESTART, F.KIND_FLOOD):
+        assert kinds.count(k) == 1, k
     cut = next(f for f in sched if f.kind == F.KIND_LINK_CUT)
     assert cut.target == "2" and cut.duration_s == 60.0
     assert next(f for f in sched if f.kind == F.KIND_LINK_CUT_PERMANENT).target == "3"
-    assert {f.target for f in sched if f.kind == F.KIND_CRASH} == {
-        "/mbzirc2020_2/fire_detector", "/mbzirc2020_1/agent", "/object_estimator", "/central_unit"}
+    crashes = {f.target: f.check for f in sched if f.kind == F.KIND_CRASH}
+    assert crashes == {"/mbzirc2020_2/fire_detector": F.CHECK_DETECTIONS, "/mbzirc2020_1/agent": F.CHECK_DATA_FEED,
+                       "/object_estimator": F.CHECK_TRACKS, "/region_manager": F.CHECK_REGIONS,
+                       "/mbzirc2020_2/circle_detector": F.CHECK_INPUTS, "/mbzirc2020_0/agent": F.CHECK_DATA_FEED,
+                       "/central_unit": F.CHECK_DECISIONS}
+    assert sched[-1].target == "/central_unit", "the central unit goes last"
     assert [f.at_s for f in sched] == sorted(f.at_s for f in sched)
     assert not any(f.kind == F.KIND_LINK_CUT_PERMANENT for f in F.default_schedule(uavs=2))
+    assert "/mbzirc2020_0/agent" not in {f.target for f in F.default_schedule(uavs=3, ugv=False)}
 
 
 def test_temporary_cut_survived_with_reassignment_and_return():
     h = [status(10, {"2": True, "3": True}, {"2": "2", "3": "3"}),
          status(20, {"2": True, "3": True}, {"2": "2", "3": "3"}),
          status(26, {"2": False, "3": True}, {"3": "3"}),
-         status(30, {"2": False, "3": True}, {"2": "3"}),
-         status(85, {"2": True, "3": True}, {"2": "3"}, tasks={"2": "search_facade"})]
+         status(30, {"2": False, "3": True}, {"2": "3"})] + \
+        [status(t, {"2": False, "3": True}, {"2": "3"}) for t in range(40, 81, 10)] + \
+        [status(85, {"2": True, "3": True}, {"2": "3"}, tasks={"2": "search_facade"})]
     r = F.evaluate_link_cut(h, "2", t_cut=21, t_restore=81)
     assert r["survived"], r
     assert r["t_noticed"] == 26 and r["floors_owned_at_cut"] == ["f2"] and r["floors_reassigned"] == ["f2"]
@@ -48,8 +56,9 @@ def test_cut_fails_when_never_noticed_or_floor_stuck_or_never_back():
     assert not r2["survived"]
     assert "still owned" in r2["detail"] and "['3'] were free" in r2["detail"] and "never came back" in r2["detail"]
     busy = [status(t, a, o, tasks={"3": "search_facade"}) for t, a, o in
-            ((10, {"2": True, "3": True}, {"2": "2"}), (25, {"2": False, "3": True}, {"2": "2"}),
-             (35, {"2": False, "3": True}, {"2": "2"}), (90, {"2": True, "3": True}, {"2": "2"}))]
+            [(10, {"2": True, "3": True}, {"2": "2"})] + [(t, {"2": False, "3": True}, {"2": "2"})
+                                                          for t in range(25, 86, 10)]
+            + [(90, {"2": True, "3": True}, {"2": "2"})]]
     r3 = F.evaluate_link_cut(busy, "2", t_cut=20, t_restore=80)
     assert r3["survived"], r3
     assert r3["floors_kept_no_free_robot"] == ["f2"]
@@ -192,7 +201,11 @@ def test_judge_agent_reaction_permanent_cut():
     v = F.judge_agent_reaction(blocked, cut, None, end, expect_home=True, busy_at_cut=True)  # its task ended late
     assert v["agent_ok"] and "return_home" in v["agent_checked"], v
     v = F.judge_agent_reaction(stuck, cut, None, end, expect_home=True, busy_at_cut=True)    # task never ended
-    assert v["agent_ok"] and "return_home" not in v["agent_checked"] and "never ended" in v["agent_unverified"][0]
+    assert not v["agent_ok"] and "never ended" in v["agent_problems"][0] and not v["agent_unverified"]
+    named = _log(("00:05", "heartbeat lost"), ("01:10", "go_home_and_refill failed: no pose"),
+                 ("01:11", "[go_home_and_refill/go_to] MOVING"))               # names the task, never started it
+    assert "return_home" not in named["events"]
+    assert not F.judge_agent_reaction(named, cut, None, end, expect_home=True)["agent_ok"]
     ended = _log(("00:05", "heartbeat lost"), ("00:06", "transitioning 'follow_path':'preempted'-->'DEFAULT'"))
     v = F.judge_agent_reaction(ended, cut, None, end, expect_home=True, busy_at_cut=True)     # ended, never went
     assert not v["agent_ok"] and "by 80 s" in v["agent_problems"][0]
@@ -209,3 +222,70 @@ def test_judge_agent_reaction_temporary_cut_needs_heartbeat_back():
     assert v["agent_ok"] and v["agent_checked"] == ["heartbeat_lost", "heartbeat_back"], v
     never = _log(("00:05", "central unit heartbeat lost"))
     assert "never logged the heartbeat back" in F.judge_agent_reaction(never, cut, restore, end, True)["agent_problems"][0]
+
+
+# ---- made-up failing histories: each verdict must fail them (issue 20) ----------------------------------
+def test_central_unit_that_sent_one_status_and_went_silent_fails_the_cut():
+    h = [status(10, {"3": True, "1": True}, {"3": "3"}), status(26, {"3": False, "1": True}, {})]
+    r = F.evaluate_link_cut(h, "3", t_cut=20, t_restore=None, t_end=120)
+    assert not r["survived"] and "stopped" in r["detail"], r
+    alive = h + [status(t, {"3": False, "1": True}, {"3": "1"}) for t in range(30, 121, 10)]
+    assert F.evaluate_link_cut(alive, "3", t_cut=20, t_restore=None, t_end=120)["survived"]
+
+
+def test_floor_released_and_never_retaken_fails():
+    h = [status(10, {"2": True, "1": True}, {"2": "2"}, tasks={"1": "x"})] + \
+        [status(t, {"2": False, "1": True}, {}) for t in range(26, 200, 10)]
+    r = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=None, t_end=200)
+    assert not r["survived"] and r["floors_released_not_retaken"] == ["f2"] and "not taken again" in r["detail"]
+    h2 = h[:4] + [status(t, {"2": False, "1": True}, {"2": "1"}) for t in range(56, 200, 10)]
+    r2 = F.evaluate_link_cut(h2, "2", t_cut=20, t_restore=None, t_end=200)
+    assert r2["survived"] and r2["floors_reassigned"] == ["f2"], r2
+
+
+def test_central_unit_restart_must_decide_again():
+    before = [status(t, {"1": True}, {"1": "1"}, tasks={"1": "a"}) for t in (100, 110)]
+    one_then_silent = before + [status(130, {"1": True}, {"1": "1"})]
+    v = F.judge_decisions(one_then_silent, t_kill=115, t_end=250)
+    assert not v["ok"] and "stopped again" in v["detail"]
+    frozen = before + [status(t, {"1": True}, {"1": "1"}) for t in range(130, 251, 5)]   # statuses, no decision
+    v = F.judge_decisions(frozen, t_kill=115, t_end=250)
+    assert not v["ok"] and "no decision" in v["detail"]
+    working = frozen[:6] + [status(t, {"1": True}, {"1": "1"}, tasks={"1": "b"}) for t in range(155, 251, 5)]
+    v = F.judge_decisions(working, t_kill=115, t_end=250)
+    assert v["ok"] and v["first_decision_after_s"] == 40.0, v
+    assert not F.judge_decisions(before, t_kill=115, t_end=250)["ok"]
+
+
+def test_clock_fault_and_flood_verdicts():
+    v = F.judge_outputs({"/central_unit/heartbeat": 50.0, "/mbzirc2020_1/data_feed": 9.0}, t_fault=10.0,
+                        expected=["/central_unit/heartbeat", "/mbzirc2020_1/data_feed", "/estimated_objects"])
+    assert not v["ok"] and v["silent_outputs"] == ["/estimated_objects", "/mbzirc2020_1/data_feed"]
+    assert F.judge_outputs({"/a": 12.0}, 10.0, ["/a"])["ok"]
+    assert not F.judge_flood([0.2, 0.3, 40.0])["ok"]
+    assert not F.judge_flood([])["ok"], "no /estimated_objects at all during the flood is a stall"
+    assert F.judge_flood([0.2, 0.4])["ok"]
+    assert not F.judge_flood([0.2], outputs_after=v)["ok"]
+
+
+def test_restarted_node_must_be_wired_again():
+    bus = [[1, "/ual_sim", "i", "TCPROS", "/mbzirc2020_2/teraranger_evo_thermal/raw_temp_array", True],
+           [2, "/ual_sim", "i", "TCPROS", "/mbzirc2020_2/ual/pose", True],
+           [3, "/agent", "o", "TCPROS", "/mbzirc2020_2/sensed_objects", True],
+           [4, "/ual_sim", "i", "TCPROS", "/clock", True]]
+    before = F.connected_inputs(bus)
+    assert before == {"/mbzirc2020_2/teraranger_evo_thermal/raw_temp_array", "/mbzirc2020_2/ual/pose"}
+    assert not F.judge_io_restored(before, set())["ok"], "a new pid alone is not a working detector"
+    assert not F.judge_io_restored(before, F.connected_inputs(bus[1:]))["ok"]
+    assert F.judge_io_restored(before, F.connected_inputs(bus))["ok"]
+
+
+def test_region_manager_restart_and_mission_floor():
+    assert not F.compare_regions({"1/go_to", "2/parked"}, {"2/parked"})["same"]
+    assert F.compare_regions({"1/go_to"}, {"1/go_to", "3/x"})["same"]
+    floor = F.mission_floor("short")
+    assert F.judge_mission({"fires_extinguished": 0, "fires_total": 8}, ["3"], floor, expected_lost=["3"])
+    assert F.judge_mission({"fires_extinguished": 5, "fires_total": 8}, ["1", "3"], floor, expected_lost=["3"])
+    assert F.judge_mission({"fires_extinguished": 5, "fires_total": 8}, ["2"], floor, expected_lost=["3"])
+    assert F.judge_mission(None, [], floor)
+    assert F.judge_mission({"fires_extinguished": 5, "fires_total": 8}, ["3"], floor, expected_lost=["3"]) == []
