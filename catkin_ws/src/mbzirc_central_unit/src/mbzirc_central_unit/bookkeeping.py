@@ -1,0 +1,119 @@
+"""Bookkeeping of the strategy: goals in flight, what each agent did last, searches done, failures, and
+which robots crashed or are broken.
+
+.. note:: this memory only saves time: a restarted strategy starts empty and at worst repeats a search.
+"""
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any, Optional
+
+from . import constants as C
+from .command import Command, StrategyParams
+from .world_model import AgentView, WorldView
+
+PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
+
+
+class Bookkeeping:
+    def __init__(self, params: StrategyParams) -> None:
+        self.p = params
+        self.facade_searches: Counter[int] = Counter()
+        self.indoor_searches: Counter[tuple[int, Any]] = Counter()  # (floor, room index or "door")
+        self.ground_searches = 0
+        self.failures: Counter[tuple[str, str, Any]] = Counter()
+        self.in_flight: dict[str, Command] = {}
+        self.last_done: dict[str, Command] = {}
+        self.finished: set[str] = set()  # agents sent home for good
+        # Fire ids a search just reported, not yet in /estimated_objects: the agent waits a few ticks.
+        self.pending_ids: dict[str, tuple[set[int], int]] = {}
+        self.consecutive_failures: Counter[str] = Counter()
+        self.seen_flying: set[str] = set()
+        self.seen_ready: set[str] = set()   # agents whose UAL reported a state (not UNINITIALIZED) once
+        self.crashed: set[str] = set()  # robots seen moving, now UNINITIALIZED: the simulator's crash state
+
+    def on_sent(self, cmd: Command) -> None:
+        """The node sent `cmd`: the agent is busy with it until `record`."""
+        self.in_flight[cmd.agent_id] = cmd
+
+    def record(self, cmd: Command, succeeded: bool, result: Optional[dict[str, Any]] = None) -> bool:
+        """Count the outcome of a command (searches done, failures); True when the agent has now failed it
+        `max_failures` times on this target: that work is given up for this agent."""
+        result = result or {}
+        self.in_flight.pop(cmd.agent_id, None)
+        if succeeded:
+            self.consecutive_failures[cmd.agent_id] = 0
+            self.last_done[cmd.agent_id] = cmd
+            if result.get("fire_ids"):
+                self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
+            self._count_search(cmd)
+            return False
+        self.last_done.pop(cmd.agent_id, None)
+        key = (cmd.agent_id, cmd.task, cmd.target)
+        self.failures[key] += 1
+        self.consecutive_failures[cmd.agent_id] += 1
+        if self.failures[key] < self.p.max_failures:
+            return False
+        self._count_search(cmd)  # a search given up counts as one, so that the mission moves on
+        return True
+
+    def _count_search(self, cmd: Command) -> None:
+        if cmd.task == C.SEARCH_FACADE:
+            self.facade_searches[cmd.target] += 1
+        elif cmd.task == C.SEARCH_INDOOR:
+            self.indoor_searches[cmd.target] += 1
+        elif cmd.task == C.LOOK_FOR_GROUND_FIRES:
+            self.ground_searches += 1
+
+    def forget(self, cmd: Command) -> None:
+        """A command that could not be sent (no action server yet): not in flight, not a failure."""
+        if self.in_flight.get(cmd.agent_id) is cmd:
+            del self.in_flight[cmd.agent_id]
+
+    def forget_agent(self, agent_id: str) -> None:
+        """An agent went silent: its goal and its last task are forgotten."""
+        self.in_flight.pop(agent_id, None)
+        self.last_done.pop(agent_id, None)
+
+    def broken(self, agent_id: str) -> bool:
+        """An agent that cannot take off any more, or failed every task of a long row (a crashed robot
+        still publishes its data_feed): it gets no more work, and owns nothing."""
+        return (agent_id in self.crashed
+                or self.failures[(agent_id, C.TAKE_OFF, None)] >= self.p.max_failures
+                or self.consecutive_failures[agent_id] >= 2 * self.p.max_failures)
+
+    def ok(self, a: AgentView, task: str, target: Any) -> bool:
+        """False once this agent failed this task on this target too often."""
+        return self.failures[(a.agent_id, task, target)] < self.p.max_failures
+
+    def note_crashes(self, world: WorldView) -> list[str]:
+        """Agents that crashed since the last call: a robot that moved (UAV flying, UGV driving:
+        FLYING_AUTO) and is UNINITIALIZED again (it lies where it fell, deaf). Their goal is forgotten."""
+        new = []
+        for a in world.agents.values():
+            if a.ual_state in (C.UAL_TAKING_OFF, C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL):
+                self.seen_flying.add(a.agent_id)
+            elif a.ual_state == C.UAL_UNINITIALIZED and a.agent_id in self.seen_flying \
+                    and a.agent_id not in self.crashed and a.alive(world.now, self.p.agent_timeout):
+                self.crashed.add(a.agent_id)
+                self.in_flight.pop(a.agent_id, None)
+                new.append(a.agent_id)
+        return new
+
+    def waiting_for_reported_fires(self, agent_id: str, world: WorldView) -> bool:
+        """True while fires the agent's last search reported have not reached /estimated_objects yet."""
+        ids, ticks = self.pending_ids.get(agent_id, (set(), 0))
+        if not ids or ids & set(world.fires) or ticks <= 0:
+            self.pending_ids.pop(agent_id, None)
+            return False
+        self.pending_ids[agent_id] = (ids, ticks - 1)
+        return True
+
+    def autopilot_not_ready(self, a: AgentView) -> bool:
+        """True until the agent's autopilot (UAL) reported a state, e.g. while the simulator starts: a goal
+        now fails at once, and three such failures made the UGV give up its job (seen). Only until its
+        first state: UNINITIALIZED later is the crash state."""
+        if a.ual_state != C.UAL_UNINITIALIZED:
+            self.seen_ready.add(a.agent_id)
+            return False
+        return a.agent_id not in self.seen_ready and a.agent_id not in self.seen_flying

@@ -1,0 +1,90 @@
+"""The water UAVs' indoor phase: which indoor floors and rooms are left, and the next step towards a
+floor's rooms (to the window, in through it, search, put the fire out, out through the same window)."""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from . import constants as C
+from . import geometry as G
+from .command import Command
+from .decider import Decider
+from .layout import Room
+from .transit import at, inside_tower
+from .ugv_decider import DOOR
+from .world_model import AgentView, FireView, WorldView
+
+VIEWPOINT_TOL = 0.7  # m: an agent this close to an indoor holder's viewpoint puts the fire out from there
+VIEWPOINT_MAX_DIST = 3.0  # m between a fire track and the viewpoint (2 m in front of its holder) used for it
+
+
+class IndoorPhase(Decider):
+    def rooms_to_search(self, floor: int) -> list[int]:
+        """Rooms of a floor searched fewer times than the limit, least searched first."""
+        searches = self.book.indoor_searches
+        rooms = range(len(self.p.layout.rooms.get(floor, [])))
+        left = [i for i in rooms if searches[(floor, i)] < self.p.facade_searches]
+        return sorted(left, key=lambda i: (searches[(floor, i)], i))
+
+    def uav_floors(self, world: WorldView) -> list[int]:
+        """Indoor floors for the UAVs: floors 1-2, and the ground floor too once the UGV is gone or gave up."""
+        floors = list(self.p.indoor_floors)
+        ugvs = [a for a in world.agents.values() if not a.is_uav]
+        ugv_alive = any(a.alive(world.now, self.p.agent_timeout) for a in ugvs)
+        ugv_done = self.book.indoor_searches[DOOR] >= self.p.facade_searches or any(
+            n >= self.p.max_failures for (aid, task, tgt), n in self.book.failures.items()
+            if task in (C.SEARCH_INDOOR, C.EXTINGUISH_INDOOR_FIRE) and aid in {u.agent_id for u in ugvs})
+        if self.p.uavs_take_ground_floor_indoors and 0 not in floors and (not ugv_alive or ugv_done):
+            floors.append(0)
+        return floors
+
+    def floors_open(self, world: WorldView) -> list[int]:
+        return [f for f in self.uav_floors(world)
+                if not world.extinguished_on(C.KIND_INDOOR, f)
+                and (world.fires_of(C.KIND_INDOOR, f) or self.rooms_to_search(f))]
+
+    def step(self, a: AgentView, floor: int, fire: Optional[FireView]) -> Optional[Command]:
+        """Next task towards a floor's rooms: to the window, in through it, search, put the fire out."""
+        layout = self.p.layout
+        rooms = layout.rooms.get(floor, [])
+        inside = inside_tower(a) and G.floor_of(a.z) == floor
+        if fire is not None:
+            if inside and layout.clear_indoors(floor, a.position, fire.position):
+                view = self._viewpoint_of(floor, fire)
+                if view is not None and math.dist(a.position, view[:3]) > VIEWPOINT_TOL \
+                        and self.book.ok(a, C.SEARCH_INDOOR, ("view", fire.fire_id)):
+                    # water along the wall's normal: from anywhere else the jet meets the wall at a slant
+                    # and the estimate's error sends most of it beside the container
+                    return Command(a.agent_id, C.SEARCH_INDOOR, {"floor": floor, "path": [view]},
+                                   f"to the viewpoint of indoor fire {fire.fire_id}, floor {floor}",
+                                   ("view", fire.fire_id))
+                return Command(a.agent_id, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
+                               f"water on indoor fire {fire.fire_id}, floor {floor}", fire.fire_id)
+            idx = layout.room_for(floor, fire.position)
+            if idx is None:
+                return None
+            return self._to_room(a, floor, idx, rooms[idx], inside, f"to indoor fire {fire.fire_id}")
+        left = [i for i in self.rooms_to_search(floor) if self.book.ok(a, C.SEARCH_INDOOR, (floor, i))]
+        if not left:
+            return None
+        idx = left[0]
+        room = rooms[idx]
+        last = self.book.last_done.get(a.agent_id)
+        just_entered = last is not None and last.task == C.ENTER_BUILDING and last.target == (floor, idx)
+        if just_entered or inside and math.dist(a.position[:2], room.inner[:2]) < 2.5:
+            return Command(a.agent_id, C.SEARCH_INDOOR, {"floor": floor, "path": list(room.path)},
+                           f"searching floor {floor} indoors (room {idx})", (floor, idx))
+        return self._to_room(a, floor, idx, room, inside, f"to search room {idx}")
+
+    def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:
+        """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire."""
+        views = [v for r in self.p.layout.rooms.get(floor, []) for v in r.path]
+        near = [v for v in views if math.dist(v[:3], fire.position) <= VIEWPOINT_MAX_DIST]
+        return min(near, key=lambda v: math.dist(v[:3], fire.position)) if near else None
+
+    def _to_room(self, a: AgentView, floor: int, idx: int, room: Room, inside: bool, why: str) -> Command:
+        """enter_building when in front of the room's window, else a transit there (leaving first)."""
+        if not inside and at(a, room.entry):
+            return Command(a.agent_id, C.ENTER_BUILDING, {"floor": floor, "entry": room.entry},
+                           f"entering floor {floor} through the window ({why})", (floor, idx))
+        return self.router.transit(a, room.entry, f"to the window of floor {floor} ({why})", floor)

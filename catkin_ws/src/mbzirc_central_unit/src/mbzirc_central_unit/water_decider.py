@@ -1,0 +1,149 @@
+"""The water UAVs' decisions: each owns one facade floor (priority `floor_priority`, the first floor last),
+searches it, puts out its fire until the tank is empty, refills, and takes the next unassigned floor; with
+no facade floor left, a second facade search, and then the indoor floors through windows (indoor_phase)."""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from . import constants as C
+from . import geometry as G
+from .command import Command
+from .decider import Decider
+from .indoor_phase import IndoorPhase
+from .transit import at, near_building, nearest
+from .world_model import AgentView, FireView, WorldView
+
+PLAUSIBLE_RADIUS = 2.0  # m from a holder of the layout for a facade / indoor fire track to be a target
+
+
+class WaterDecider(Decider):
+    def __init__(self, *parts, indoor: IndoorPhase) -> None:
+        super().__init__(*parts)
+        self.indoor = indoor
+
+    def decide(self, a: AgentView, world: WorldView) -> Optional[Command]:
+        if a.water_level < self.p.min_water:
+            self.owners.release(a.agent_id)
+            if not self.book.ok(a, C.GO_HOME_AND_REFILL, None):
+                return None  # the refills keep failing: nothing more this robot can do
+            return self.router.go_home(a, "refill: the tank is empty")
+        job = self._job(a, world)
+        if job is None:
+            self.owners.release(a.agent_id)
+            return self.router.go_home_for_good(a)
+        kind, floor, fire = job
+        self.owners.take(kind, floor, a.agent_id)
+        self.book.finished.discard(a.agent_id)
+        if a.landed:
+            return Command(a.agent_id, C.TAKE_OFF, {"height": self.router.altitude(a.agent_id)},
+                           f"to the {kind} job on floor {floor}")
+        if kind == C.KIND_FACADE:
+            return self._facade_step(a, floor, fire)
+        return self.indoor.step(a, floor, fire)
+
+    def facade_floors_open(self, world: WorldView) -> list[int]:
+        """Facade floors whose fire is not out yet and that still deserve a search or a fire job."""
+        out = []
+        for f in self.p.floor_priority:
+            if world.extinguished_on(C.KIND_FACADE, f):
+                continue
+            if world.fires_of(C.KIND_FACADE, f) or self.book.facade_searches[f] < self.p.facade_searches:
+                out.append(f)
+        return out
+
+    def _job(self, a: AgentView, world: WorldView) -> Optional[tuple[str, int, Optional[FireView]]]:
+        """(kind, floor, fire or None) of the next job of a water UAV, in strategy order."""
+        aid = a.agent_id
+        owners = self.owners
+        # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first).
+        mine = [f for f in world.fires_of(C.KIND_FACADE)
+                if owners.floor_owner.get(f.floor) == aid and self._fire_ok(a, f)]
+        free = [f for f in world.fires_of(C.KIND_FACADE)
+                if owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
+        for group in (mine, free):
+            if group:
+                f = nearest(a, group)
+                return (C.KIND_FACADE, f.floor, f)
+        # 2. an indoor fire already known on a floor I own or nobody owns.
+        indoor = [f for f in world.fires_of(C.KIND_INDOOR) if f.floor in self.indoor.uav_floors(world)
+                  and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
+                  and self.p.layout.room_for(f.floor, f.position) is not None]
+        if indoor:
+            f = nearest(a, indoor)
+            return (C.KIND_INDOOR, f.floor, f)
+        # 3. my floor or the next free floor, first searches before second ones.
+        searches = self.book.facade_searches
+        open_floors = self.facade_floors_open(world)
+        first = [f for f in open_floors if searches[f] == 0]
+        second = [f for f in open_floors if searches[f] >= 1]
+        second = [f for f in second if searches[f] < self.p.facade_searches]
+        indoor_floors = [f for f in self.indoor.floors_open(world)
+                         if any(self.book.ok(a, C.SEARCH_INDOOR, (f, i)) for i in self.indoor.rooms_to_search(f))]
+        groups = [first, second, indoor_floors] if self.p.second_search_first else [first, indoor_floors, second]
+        for group in groups:
+            is_indoor = group is indoor_floors
+            owner_map = owners.indoor_owner if is_indoor else owners.floor_owner
+            kind = C.KIND_INDOOR if is_indoor else C.KIND_FACADE
+            candidates = [f for f in group if owners.free_for(f, aid, world)
+                          and (is_indoor or self.book.ok(a, C.SEARCH_FACADE, f))
+                          and self.book.ok(a, C.FOLLOW_PATH, ("transit", f))]
+            if not candidates:
+                continue
+            owned = [f for f in candidates if owner_map.get(f) == aid]
+            if owned:
+                return (kind, owned[0], None)
+            # A UAV already at a floor (e.g. after a restart) keeps it when it is a candidate.
+            here = G.floor_of(a.z)
+            if here in candidates and near_building(a):
+                return (kind, here, None)
+            return (kind, candidates[0], None)
+        return None
+
+    def _facade_step(self, a: AgentView, floor: int, fire: Optional[FireView]) -> Command:
+        """Next task towards searching a floor or putting out a facade fire: elevator transit first."""
+        if fire is not None:
+            last = self.book.last_done.get(a.agent_id)
+            if last is not None and last.task == C.GO_TO_FACADE_FIRE and last.target == fire.fire_id:
+                return Command(a.agent_id, C.EXTINGUISH_FACADE_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
+                               f"water on facade fire {fire.fire_id}, floor {floor}", fire.fire_id)
+            vp = G.viewpoint(fire.position, standoff=C.FACADE_STANDOFF)
+            close = math.dist(a.position, fire.position) <= C.FACADE_STANDOFF + 1.5 and abs(a.z - fire.z) < 1.5
+            if not close and not at(a, vp):
+                return self.router.transit(a, vp, f"to facade fire {fire.fire_id}, floor {floor}", floor)
+            return Command(a.agent_id, C.GO_TO_FACADE_FIRE,
+                           {"fire_id": fire.fire_id, "distance": self.p.fire_distance, "_floor": floor},
+                           f"facing facade fire {fire.fire_id}, floor {floor}", fire.fire_id)
+        paths = [G.facade_search_path(floor, self.p.layout.facade_holders, reverse=r) for r in (False, True)]
+        path = paths[0]
+        ready = [p for p in paths if p and at(a, p[0])]
+        if ready:
+            path = ready[0]
+        elif path:
+            # Search in the direction whose first viewpoint is the quickest to reach.
+            path = min(paths, key=lambda p: self.router.route(a, a.position, p[0])[0])
+        if not path:
+            self.book.facade_searches[floor] = max(self.book.facade_searches[floor], self.p.facade_searches)
+            return Command(a.agent_id, C.HOVER, {"duration": 1.0}, f"floor {floor} has no fire holder")
+        if not at(a, path[0]):
+            return self.router.transit(a, path[0], f"to floor {floor} via the elevator", floor)
+        return Command(a.agent_id, C.SEARCH_FACADE, {"floor": floor, "path": path},
+                       f"searching the facades of floor {floor}", floor)
+
+    def _plausible(self, f: FireView) -> bool:
+        """A facade / indoor fire track within PLAUSIBLE_RADIUS of a holder of the layout. A track far from
+        every holder is a stray or drifted estimate; sending a UAV to aim at it leads it into the wall."""
+        layout = self.p.layout
+        if f.kind == C.KIND_FACADE:
+            holders = layout.facade_holders
+        elif f.kind == C.KIND_INDOOR:
+            holders = [h[:3] for h in layout.indoor_holders]
+        else:
+            return True
+        return any(math.dist(f.position, h[:3]) <= PLAUSIBLE_RADIUS for h in holders)
+
+    def _fire_ok(self, a: AgentView, f: FireView) -> bool:
+        tasks = (C.GO_TO_FACADE_FIRE, C.EXTINGUISH_FACADE_FIRE) if f.kind == C.KIND_FACADE \
+            else (C.EXTINGUISH_INDOOR_FIRE,)
+        return all(self.book.ok(a, t, f.fire_id) for t in tasks) \
+            and self.book.ok(a, C.FOLLOW_PATH, ("transit", f.floor)) and self._plausible(f)
