@@ -21,6 +21,7 @@ from __future__ import annotations
 import base64
 import binascii
 import io
+import itertools
 import json
 import math
 import pickle
@@ -212,36 +213,51 @@ def decode_local_data(text: str, allow_unsafe: bool = False) -> dict:
     return data
 
 
-def _children(obj: Any) -> Optional[list]:
+_CONTAINERS = (dict, list, tuple, set, frozenset)
+_LEAVES = (str, int, float, bool, type(None), bytes, bytearray, complex)
+_LEAF_TYPES = frozenset(_LEAVES)  # exact types: a fast test in the hot loops
+
+
+def _children(obj: Any) -> Optional[Iterable]:
     """The values directly inside a decoded container (None for a leaf)."""
     if isinstance(obj, dict):
-        return [x for kv in obj.items() for x in kv]
+        return itertools.chain(obj.keys(), obj.values())
     if isinstance(obj, (list, tuple, set, frozenset)):
-        return list(obj)
+        return obj
     if isinstance(obj, Opaque):
-        return [obj.state, list(obj.args)]
+        return (obj.state, obj.args)
     return None
 
 
 def check_limits(data: Any, max_depth: int = MAX_DEPTH, max_values: int = MAX_VALUES) -> None:
-    """Raise DecodeError if decoded data nests deeper than ``max_depth`` or reaches more than
-    ``max_values`` values. Linear in the payload: each container is expanded once (a memo of visited
-    objects), so shared references (a 444-byte pickle can describe a DAG of 2**45 paths) cost nothing."""
+    """Raise DecodeError if decoded data nests deeper than ``max_depth`` or holds more than ``max_values``
+    values. Linear in the payload: each container is expanded once (a memo of visited objects), so shared
+    references (a 444-byte pickle can describe a DAG of 2**45 paths) cost nothing."""
     seen: set = set()
     stack = [(data, 0)]
     count = 0
     while stack:
         obj, depth = stack.pop()
-        count += 1
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if isinstance(obj, dict):
+            count += 2 * len(obj)
+            inner = [c for c in itertools.chain(obj.keys(), obj.values()) if type(c) not in _LEAF_TYPES]
+        elif isinstance(obj, (list, tuple, set, frozenset)):
+            count += len(obj)
+            inner = [c for c in obj if type(c) not in _LEAF_TYPES]
+        elif isinstance(obj, Opaque):
+            count += 2
+            inner = [obj.state, obj.args]
+        else:
+            continue
         if count > max_values:
             raise DecodeError("local_data holds more than %d values" % max_values)
-        inner = _children(obj)
-        if inner is None or id(obj) in seen:
-            continue
-        if depth >= max_depth:
-            raise DecodeError("local_data nests deeper than %d levels" % max_depth)
-        seen.add(id(obj))
-        stack.extend((child, depth + 1) for child in inner)
+        if inner:
+            if depth + 1 >= max_depth:
+                raise DecodeError("local_data nests deeper than %d levels" % max_depth)
+            stack.extend((child, depth + 1) for child in inner)
 
 
 def contains_opaque(obj: Any) -> bool:
@@ -253,23 +269,13 @@ def contains_opaque(obj: Any) -> bool:
         item = stack.pop()
         if isinstance(item, Opaque):
             return True
-        inner = _children(item)
-        if inner is None or id(item) in seen:
+        if id(item) in seen:
             continue
         seen.add(id(item))
-        stack.extend(inner)
+        inner = _children(item)
+        if inner is not None:
+            stack.extend(child for child in inner if not isinstance(child, _LEAVES))
     return False
-
-
-class _Budget:
-    """How many more values :func:`to_plain` may emit (shared references are expanded in JSON)."""
-
-    def __init__(self, values: int) -> None:
-        self.left = values
-
-    def take(self) -> bool:
-        self.left -= 1
-        return self.left >= 0
 
 
 def to_plain(obj: Any, max_depth: int = 30, max_values: int = 20000) -> Any:
@@ -278,11 +284,12 @@ def to_plain(obj: Any, max_depth: int = 30, max_values: int = 20000) -> Any:
     Bounded: past ``max_depth`` levels a value shows as ``"..."``, a cycle as ``"<cycle>"``, and once
     ``max_values`` values were emitted the rest show as ``"<truncated>"`` (shared references make the
     JSON form of a small payload exponentially large)."""
-    return _plain(obj, 0, max_depth, _Budget(max_values), set())
+    return _plain(obj, 0, max_depth, [max_values], set())
 
 
-def _plain(obj: Any, depth: int, max_depth: int, budget: _Budget, path: set) -> Any:
-    if not budget.take():
+def _plain(obj: Any, depth: int, max_depth: int, budget: list, path: set) -> Any:
+    budget[0] -= 1
+    if budget[0] < 0:
         return "<truncated>"
     if obj is None or isinstance(obj, (bool, int, str)):
         return obj
@@ -292,20 +299,19 @@ def _plain(obj: Any, depth: int, max_depth: int, budget: _Budget, path: set) -> 
         return "<%d bytes>" % len(obj) if len(obj) > 64 else repr(bytes(obj))
     if isinstance(obj, complex):
         return str(obj)
-    if _children(obj) is None:
+    if not isinstance(obj, _CONTAINERS) and not isinstance(obj, Opaque):
         return _short_repr(obj)
     if depth > max_depth:
         return "..."
     if id(obj) in path:
         return "<cycle>"
     path.add(id(obj))
+    depth += 1
     try:
-        def sub(value: Any) -> Any:
-            return _plain(value, depth + 1, max_depth, budget, path)
         if isinstance(obj, dict):
-            return {str(k): sub(v) for k, v in obj.items()}
-        if isinstance(obj, (list, tuple, set, frozenset)):
-            return [sub(v) for v in obj]
+            return {str(k): _plain(v, depth, max_depth, budget, path) for k, v in obj.items()}
+        if isinstance(obj, _CONTAINERS):
+            return [_plain(v, depth, max_depth, budget, path) for v in obj]
         out: dict[str, Any] = {"__class__": obj._qualname}
         state = obj.state
         if isinstance(state, tuple) and len(state) == 2 and (state[0] is None or isinstance(state[0], dict)) \
@@ -314,9 +320,9 @@ def _plain(obj: Any, depth: int, max_depth: int, budget: _Budget, path: set) -> 
             merged.update(state[1] or {})
             state = merged
         if state is not None:
-            out["state"] = sub(state)
+            out["state"] = _plain(state, depth, max_depth, budget, path)
         elif obj.args:
-            out["args"] = sub(list(obj.args))
+            out["args"] = _plain(list(obj.args), depth, max_depth, budget, path)
         return out
     finally:
         path.discard(id(obj))
