@@ -23,12 +23,14 @@ import numpy as np
 
 from _common import use_sources, write_result
 
-use_sources('mbzirc_agents/src', 'object_estimation/src', 'shared_regions_manager/src', 'smach/src',
-            'mbzirc_agents/test/unit')
+use_sources('mbzirc_arena/src', 'mbzirc_agents/src', 'object_estimation/src', 'shared_regions_manager/src',
+            'smach/src', 'mbzirc_agents/test/unit')
 
 from mbzirc_agents import constants as C  # noqa: E402
+from mbzirc_arena import c3  # noqa: E402
 from object_estimation.core import Detection, ObjectEstimator  # noqa: E402
-from mbzirc_agents.geometry import in_footprint, plan_2d, path_length  # noqa: E402
+from mbzirc_arena.buildings import in_footprint  # noqa: E402
+from mbzirc_arena.routing import path_length, plan_2d  # noqa: E402
 from shared_regions_manager.core import RegionManager  # noqa: E402
 
 QUICK = '--quick' in sys.argv
@@ -123,10 +125,10 @@ def bench_planner() -> dict:
     while len(times) < n:
         s = (rng.uniform(-15, 42), rng.uniform(-12, 36))
         g = (rng.uniform(-15, 42), rng.uniform(-12, 36))
-        if in_footprint(s, C.BUILDINGS, 1.6) or in_footprint(g, C.BUILDINGS, 1.6):
+        if in_footprint(s, c3.FOOTPRINTS, 1.6) or in_footprint(g, c3.FOOTPRINTS, 1.6):
             continue
         t0 = time.perf_counter()
-        p = plan_2d(s, g, C.BUILDINGS, 1.5)
+        p = plan_2d(s, g, c3.FOOTPRINTS, 1.5)
         times.append(time.perf_counter() - t0)
         if p is None:
             fails += 1
