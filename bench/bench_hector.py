@@ -23,10 +23,11 @@ import time
 
 from _common import load_average_1min, use_sources, write_result
 
-use_sources("hector_mapping/src")
+use_sources("hector_mapping/src", "hector_mapping/test")
 
 # hector_mapping before numpy: the package sets numpy's threads up as in the node
-from hector_mapping import indoor, sim2d  # noqa: E402
+import indoor  # noqa: E402  (hector_mapping's test fixtures)
+import sim2d  # noqa: E402
 from hector_mapping.geometry import transform_points  # noqa: E402
 from hector_mapping.scan import ScanFilter, scan_to_points  # noqa: E402
 from hector_mapping.slam import HectorSlam, SlamParams  # noqa: E402

@@ -29,7 +29,8 @@ from geometry_msgs.msg import PoseStamped, TransformStamped  # noqa: E402
 from sensor_msgs.msg import LaserScan  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
-from hector_mapping import indoor, sim2d  # noqa: E402
+import indoor  # noqa: E402  (test fixtures in this folder)
+import sim2d  # noqa: E402
 from hector_mapping.geometry import quaternion_from_yaw  # noqa: E402
 
 NS = "mbzirc2020_1"

@@ -15,7 +15,7 @@ from nav_msgs.msg import OccupancyGrid
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import LaserScan
 
-from hector_mapping import sim2d
+import sim2d
 
 NS = "mbzirc2020_1"
 

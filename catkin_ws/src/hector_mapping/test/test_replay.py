@@ -23,7 +23,7 @@ from sensor_msgs.msg import LaserScan
 from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
-from hector_mapping.indoor import map_wall_check
+from indoor import map_wall_check  # test fixture in this folder
 
 NS = "mbzirc2020_1"
 

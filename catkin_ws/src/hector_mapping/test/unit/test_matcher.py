@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from hector_mapping import sim2d
+import sim2d
 from hector_mapping.geometry import compose, inverse, transform_points
 from hector_mapping.grid import GridLevel
 from hector_mapping.matcher import best_rotation, match_level, residual

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from hector_mapping import sim2d
+import sim2d
 from hector_mapping.geometry import compose, inverse, wrap_angle
 from hector_mapping.scan import ScanFilter, scan_to_points
 from hector_mapping.slam import HectorSlam, SlamParams

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import wrap_angle
+from hector_mapping.geometry import wrap_angle
 
 #: The RPLidar of the thesis: 720 beams over 360 degrees, first beam at -pi, front beam at index 360.
 N_BEAMS = 720

@@ -1,20 +1,19 @@
-"""Simulated indoor flights on the first floor of ual_sim's tower, for the benchmark and the test bag.
+"""Test fixture: simulated indoor flights on the first floor of ual_sim's tower, for the benchmark and the
+test bag (not part of the SLAM, not installed).
 
-Scans come from ual_sim's pure world model (``ual_sim.world.World.laser_scan``, the simulator's own
-2D ray caster on the C3 world file) when it is importable; otherwise from this package's stand-in floor
-plan (``sim2d.tower_floor``). :func:`world_source` says which one was used. Not part of the SLAM.
+Scans come from ual_sim's pure world model (``ual_sim.world.World.laser_scan``, the simulator's own 2D ray
+caster on the C3 world file; ual_sim is a test dependency) when it is importable, i.e. in a sourced
+workspace; otherwise from the stand-in floor plan ``sim2d.tower_floor``. :func:`world_source` says which.
 """
 from __future__ import annotations
 
 import math
-import os
-import sys
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from . import sim2d
+import sim2d
 
 #: Flight height of the UAV on the tower's first floor (floor at 5.0 m; doorways up to 7.2 m, so a UAV of
 #: 0.5 m radius passes under their lintel) and the laser mount above base_link (ual_sim's offset).
@@ -41,20 +40,12 @@ class IndoorWorld:
 
 
 def _import_ual_sim():
-    """ual_sim.world, also from the source tree when the workspace is not sourced; None if absent."""
+    """ual_sim.world (the simulator's world model, a test dependency); None when not importable."""
     try:
-        import ual_sim.world as world  # noqa: PLC0415 - optional dependency
+        import ual_sim.world as world  # noqa: PLC0415 - optional: the stand-in floor plan otherwise
         return world
     except ImportError:
-        src = os.path.join(os.path.dirname(__file__), "..", "..", "..", "ual_sim", "src")
-        if os.path.isdir(src) and src not in sys.path:
-            sys.path.append(src)
-            try:
-                import ual_sim.world as world  # noqa: PLC0415
-                return world
-            except ImportError:
-                return None
-    return None
+        return None
 
 
 def world_source(prefer_ual_sim: bool = True) -> IndoorWorld:
