@@ -61,3 +61,15 @@ def test_the_readme_lists_every_param():
     text = open(README).read()
     missing = [f.name for f in fields(AgentParams) if f'`{f.name}`' not in text]
     assert not missing, f'README.md does not list {missing}'
+
+
+def test_the_node_logs_unknown_and_malformed_params_and_runs_on_the_rest(monkeypatch):
+    import rospy
+    from mbzirc_agents import agent_node
+    private = {'uav_id': 2, 'max_sped': 2.0, 'max_speed': 'fast', 'service_timeout': 3.0, 'smach_allow_init': False}
+    monkeypatch.setattr(rospy, 'get_param', lambda name, default=None: private if name == '~' else default)
+    errors = []
+    monkeypatch.setattr(rospy, 'logerr', errors.append)
+    assert agent_node.read_params() == {'uav_id': '2'}
+    assert sorted(errors) == ['unknown param ~max_sped: ignored',
+                              "~max_speed: expected a finite number, got 'fast' (default 1.6): ignored"]
