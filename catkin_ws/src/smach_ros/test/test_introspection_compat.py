@@ -10,7 +10,8 @@
 * a root path of '/' gives children '/<label>';
 * userdata that cannot be pickled (a lock, a subprocess, upstream #18/#77) or that is excluded by key does
   not stop the machine nor the status messages;
-* with ``allow_init=False`` the server does not listen to container_init at all.
+* with ``allow_init=False`` the server does not listen to container_init at all, and by default it offers
+  no debugger (a latched debug status says so, nothing is wrapped, no command subscriber).
 """
 import subprocess
 import sys
@@ -18,9 +19,13 @@ import threading
 import time
 import unittest
 
+import json
+
+import rosgraph
 import rospy
 import rostest
 from smach_msgs.msg import SmachContainerStatus
+from std_msgs.msg import String
 
 import smach
 import smach_ros
@@ -176,6 +181,14 @@ class TestIntrospectionCompat(unittest.TestCase):
             self.assertIn("/robot_ns/compat_d/smach/container_status", topics)
             self.assertFalse(client.set_initial_state("compat_d", "/D", ["B"], timeout=rospy.Duration(1.5)))
             self.assertEqual(root.get_initial_states(), ["A"])
+            # the debugger is off by default: a latched status says so, nobody listens to commands
+            status = json.loads(rospy.wait_for_message("compat_d/smach/debug/status", String, 5).data)
+            self.assertEqual(status["allowed"], False)
+            self.assertNotIn("execute", root["A"].__dict__)  # nothing wrapped
+            master = rosgraph.Master(rospy.get_name())
+            subscribed = [t for t, _ in master.getSystemState()[1]]
+            self.assertNotIn("/robot_ns/compat_d/smach/debug/command", subscribed)
+            self.assertNotIn("/robot_ns/compat_d/smach/container_init", subscribed)
         finally:
             server.stop()
 

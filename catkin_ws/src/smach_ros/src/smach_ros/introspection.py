@@ -232,11 +232,18 @@ class IntrospectionServer:
                       "network can pause this machine and force outcomes." % self._server_name)
         breakpoints = self._breakpoints + [str(p) for p in rospy.get_param("~smach_debug_breakpoints", [])]
         pub = self._debug_pub
-        self._debugger = StateDebugger(self._state, self._path, lambda text: pub.publish(String(data=text)),
-                                       breakpoints, self._exclude_keys or (), is_shutdown=rospy.is_shutdown)
-        self._debugger.install()
+
+        def publish(text: str) -> None:
+            try:
+                pub.publish(String(data=text))
+            except rospy.ROSException:  # stopped or shutting down: nobody to tell
+                pass
+
+        debugger = self._debugger = StateDebugger(self._state, self._path, publish, breakpoints,
+                                                  self._exclude_keys or (), is_shutdown=rospy.is_shutdown)
+        debugger.install()
         self._debug_sub = rospy.Subscriber(self._server_name + DEBUG_COMMAND_TOPIC, String,
-                                           lambda msg: self._debugger.handle_command(msg.data), queue_size=20)
+                                           lambda msg: debugger.handle_command(msg.data), queue_size=20)
 
     def construct(self, server_name: str, state: smach.State, path: str) -> None:
         """Create a proxy for ``state`` and, recursively, for every container below it."""
