@@ -48,6 +48,7 @@ UGV_INDOOR_PATH = [(12.4, 8.5, 0.0), (16.5, 11.0, 0.0), (19.5, 11.0, 0.0), (23.0
 # ---- agent defaults ---------------------------------------------------------------------------------
 CONTROL_RATE_HZ = 10.0          # every control / monitoring loop of a task
 DATA_FEED_RATE_HZ = 10.0
+DATA_FEED_IDLE_PERIOD = 0.5      # s between two data_feeds that say the same (the ground station: 'late' after 1 s)
 HEARTBEAT_TOPIC = '/central_unit/heartbeat'
 CENTRAL_UNIT_TIMEOUT = 5.0
 RETURN_HOME_TIMEOUT = 60.0

@@ -31,6 +31,14 @@ from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
 
+
+def feed_content(msg: AgentDataFeed) -> tuple:
+    """What a data_feed says, to the centimetre and the hundredth of a litre: two feeds with the same
+    content tell nothing new (the stamp and the pose message's stamp left out)."""
+    p, q = msg.pose.pose.position, msg.pose.pose.orientation
+    return (round(p.x, 2), round(p.y, 2), round(p.z, 2), round(q.z, 3), round(q.w, 3), msg.ual_state,
+            msg.active_task, msg.active_sub_state, round(msg.water_level, 2), msg.has_blanket, msg.payload)
+
 class RobotAgent(Agent):
     """Base of UavAgent and UgvAgent. `params`: the node's ~params that are set (name -> value, see
     params.AgentParams; ParamError when one is unknown or malformed)."""
@@ -79,6 +87,7 @@ class RobotAgent(Agent):
         self.pump_start_srv = ifc.add_client('actuators_system/start_pump', Trigger)
         self.pump_stop_srv = ifc.add_client('actuators_system/stop_pump', Trigger)
         ifc.add_service_server(None, 'get_cost_to_go_to', GetCostToGoTo, default_callback=self._on_cost)
+        self._last_feed: tuple = (None, -1e9)   # content and ROS time of the last data_feed sent
         self.timer = backend.timer(1.0 / C.DATA_FEED_RATE_HZ, self._on_timer)
 
     def start(self) -> None:
@@ -129,7 +138,19 @@ class RobotAgent(Agent):
 
     # ---- data feed + heartbeat watchdog -----------------------------------------------------------
     def _on_timer(self, _event: Any = None) -> None:
-        self.feed_pub.publish(self.data_feed())
+        """data_feed at DATA_FEED_RATE_HZ while it changes, every DATA_FEED_IDLE_PERIOD while it does not
+        (a landed or hovering idle robot), not at all while nobody subscribes. Why: four feeds at 10 Hz to
+        the central unit, the recorder and the ground station, mostly of robots waiting at home."""
+        count = getattr(self.feed_pub, 'get_num_connections', None)
+        if count is not None and count() == 0:
+            return
+        msg = self.data_feed()
+        key, now = feed_content(msg), self.backend.now()
+        last_key, last_time = self._last_feed
+        if key == last_key and last_time <= now < last_time + C.DATA_FEED_IDLE_PERIOD:
+            return
+        self._last_feed = (key, now)
+        self.feed_pub.publish(msg)
 
     def _watchdog_loop(self) -> None:
         """The watchdog at DATA_FEED_RATE_HZ on the wall clock (a WallTimer: runs when /clock stops)."""
