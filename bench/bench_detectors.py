@@ -22,7 +22,7 @@ import time
 
 from _common import SRC, use_sources, write_result
 
-use_sources("fire_detector/src", "circle_detector/src")
+use_sources("fire_detector/src", "circle_detector/src", "fire_detector/test", "circle_detector/test")
 
 # the detectors' packages before numpy and OpenCV: they set the numeric libraries up as in the nodes
 import circle_detector  # noqa: E402,F401
@@ -31,14 +31,14 @@ import fire_detector  # noqa: E402,F401
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from circle_detector import synthetic as CS  # noqa: E402
 from circle_detector.hole_choice import choose_middle_hole  # noqa: E402
 from circle_detector.hough import HoughParams, depth_to_metres, detect_circles  # noqa: E402
 from circle_detector.images import image_to_array, to_bgr  # noqa: E402
 from fire_detector import constants as FC  # noqa: E402
-from fire_detector import synthetic as FS  # noqa: E402
 from fire_detector.detector import DetectorConfig, FireDetector  # noqa: E402
 from fire_detector.geometry import front_laser_range  # noqa: E402
+import synthetic_rgbd as CS  # noqa: E402  (the detectors' test fixtures)
+import synthetic_thermal as FS  # noqa: E402
 
 QUICK = "--quick" in sys.argv
 FIRE_BANDS = [(1.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, 6.0), (6.0, 8.0)]

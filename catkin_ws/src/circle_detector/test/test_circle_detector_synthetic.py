@@ -17,7 +17,7 @@ from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
 from mbzirc_test_utils.collector import Collector, agent_id
 from sensor_msgs.msg import CameraInfo, Image
 
-from circle_detector import synthetic as S
+import synthetic_rgbd as S  # test fixture in this folder
 
 PKG = "circle_detector"
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rostest: fire_detector fed by synthetic_thermal_publisher (one named scene per robot namespace).
 
-Params: ~scene (a fire_detector.synthetic.NAMED_SCENES name), ~expect_fire (bool).
+Params: ~scene (a synthetic_thermal.NAMED_SCENES name), ~expect_fire (bool).
 Checks the detections (type, ThermalImage fields, agent id, position error against the scene's known
 fire), CheckFire, the debug topic, and that malformed inputs are survived.
 """
@@ -19,7 +19,7 @@ from mbzirc_test_utils.collector import Collector, agent_id
 from sensor_msgs.msg import LaserScan, Temperature
 from std_msgs.msg import Float64MultiArray
 
-from fire_detector import synthetic as S
+import synthetic_thermal as S  # test fixture in this folder
 
 PKG = "fire_detector"
 

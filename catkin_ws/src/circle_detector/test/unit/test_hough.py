@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from circle_detector import synthetic as S
+import synthetic_rgbd as S
 from circle_detector.hole_choice import choose_middle_hole
 from circle_detector.hough import HoughParams, Intrinsics, depth_to_metres, detect_circles
 from circle_detector.rectify import fit_plane

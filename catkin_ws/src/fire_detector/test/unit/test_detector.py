@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from fire_detector import constants as C
-from fire_detector import synthetic as S
+import synthetic_thermal as S
 from fire_detector.detector import DetectorConfig, FireDetector
 from fire_detector.geometry import front_laser_range
 
