@@ -16,6 +16,7 @@ from smach_ros.userdata_codec import DecodeError, decode_local_data, to_plain
 __all__ = ["ViewerModel", "ContainerView", "build_dot"]
 
 STALE_AFTER_S = 10.0  # a server silent this long (no heartbeat) is shown as stale
+MAX_DEBUG_STATUS_CHARS = 256 * 1024  # a server's debug status is sent to every browser: bounded
 
 
 @dataclass
@@ -106,10 +107,18 @@ class ViewerModel:
             self._bump()
 
     def update_debug(self, server: str, status_json: str) -> None:
-        """Store a server's debug status (JSON text); malformed text raises ValueError."""
+        """Store a server's debug status (JSON text, see smach_ros.debugger); text that is too long or not of
+        that shape raises ValueError (it would reach every browser as is)."""
+        if len(status_json) > MAX_DEBUG_STATUS_CHARS:
+            raise ValueError("debug status of %d characters (cap %d)" % (len(status_json), MAX_DEBUG_STATUS_CHARS))
         status = json.loads(status_json)
         if not isinstance(status, dict) or not isinstance(status.get("allowed"), bool):
             raise ValueError("debug status must be a JSON object with a boolean 'allowed'")
+        paused = status.get("paused", [])
+        if not isinstance(paused, list) or not isinstance(status.get("breakpoints", []), list) or not all(
+                isinstance(p, dict) and isinstance(p.get("path"), str) and isinstance(p.get("outcomes"), list)
+                and isinstance(p.get("userdata_notes", []), list) for p in paused):
+            raise ValueError("debug status: 'paused' must list {path, outcomes, ...} objects")
         with self._lock:
             self._debug[server] = status
             self._bump()

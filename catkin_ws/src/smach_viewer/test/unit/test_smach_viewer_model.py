@@ -100,3 +100,22 @@ def test_dot_escapes_hostile_labels():
     m.update_structure("/s", "/R", ['a"b\\c', "<x>"], [], [], [], ['o"'])
     dot = m.dot("/s")
     assert '"/R/a\\"b\\\\c"' in dot
+
+
+def test_debug_status_is_validated_and_bounded():
+    import json
+    import pytest
+    from smach_viewer.model import MAX_DEBUG_STATUS_CHARS, ViewerModel
+    m = ViewerModel()
+    m.update_structure("/s", "/R", ["A"], [], [], [], ["x"])
+    good = {"allowed": True, "breakpoints": ["/R/A"], "paused": [{"path": "/R/A", "outcomes": ["x"],
+                                                                   "userdata": {}, "userdata_notes": []}]}
+    m.update_debug("/s", json.dumps(good))
+    assert m.snapshot()["servers"]["/s"]["debug"] == good
+    for bad in ("[]", '{"allowed": "yes"}', '{"allowed": true, "paused": [{"path": 1}]}', "not json",
+                json.dumps({"allowed": True, "pad": "x" * MAX_DEBUG_STATUS_CHARS})):
+        with pytest.raises(ValueError):
+            m.update_debug("/s", bad)
+    assert m.debug("/s") == good
+    m.remove_server("/s")
+    assert m.debug("/s") is None
