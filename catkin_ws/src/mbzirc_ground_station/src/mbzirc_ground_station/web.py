@@ -25,6 +25,10 @@ FULL_FRAME_EVERY = 10     # tracks (the heavy part) go in every 10th frame and i
 SSE_RETRY_MS = 1000
 
 
+class _Server(ThreadingHTTPServer):
+    request_queue_size = 64   # many pages reconnect at once after a restart
+
+
 class FrameSource(Protocol):
     """Where frames come from: the live state or a replay."""
 
@@ -59,10 +63,9 @@ class GroundStationServer:
         self._cond = threading.Condition()
         self._seq = 0
         self._frame_bytes = b""
-        self._full_bytes = b""
         with open(PAGE_PATH, "rb") as f:
             self._page = f.read()
-        self.httpd = ThreadingHTTPServer((host, port), self._make_handler())
+        self.httpd = _Server((host, port), self._make_handler())
         self.httpd.daemon_threads = True
         self.allowed = allowed_hosts(host, self.port, allowed_extra)
         self._threads: list[threading.Thread] = []
@@ -99,6 +102,9 @@ class GroundStationServer:
             if step is not None:
                 step(now - last)
             last = now
+            if self.clients == 0:      # nobody watching: no frames (the state still follows the messages)
+                self._stop.wait(self.period)
+                continue
             full = self._seq % FULL_FRAME_EVERY == 0
             try:
                 data = self._build(full)
@@ -106,8 +112,6 @@ class GroundStationServer:
                 data = json.dumps({"error": "frame failed: %s" % ex, "seq": self._seq}).encode("utf-8")
             with self._cond:
                 self._frame_bytes = data
-                if full:
-                    self._full_bytes = data
                 self._seq += 1
                 self._cond.notify_all()
             self._stop.wait(max(0.0, self.period - (time.monotonic() - now)))
