@@ -62,7 +62,7 @@ def test_water_flows_until_the_fire_reads_cold_several_times(scenes):
     s = sc.extinguish()
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert sc.statuses == [C.STATUS_EXTINGUISHED]
-    # hot 1 s of pumping, then C.COLD_CHECKS cold answers 0.5 s (sim = wall here) apart, water flowing
+    # hot 1 s of pumping, then C.COLD_CHECKS cold answers 0.5 s apart, water flowing
     used = 2.0 - sc.ual.water
     assert used >= 0.4 * (1.0 + 0.5 * (C.COLD_CHECKS - 1)) * 0.8, f'only {used:.2f} L pumped'
 
