@@ -12,10 +12,9 @@ FOCAL_PX = (IMG_WIDTH / 2.0) / math.tan(math.radians(FOV_DEG / 2.0))
 CENTER_U = (IMG_WIDTH - 1) / 2.0
 CENTER_V = (IMG_HEIGHT - 1) / 2.0
 
-# Camera directions, same values as mbzirc_comm_objs/ThermalImage.CAMERA_DIRECTION_*.
-CAMERA_DIRECTION_UNKNOWN = 0
-CAMERA_DIRECTION_FORWARD = 1
-CAMERA_DIRECTION_DOWNWARD = 2
+# Camera directions: mbzirc_comm_objs/ThermalImage.CAMERA_DIRECTION_*, named once in mbzirc_arena.
+from mbzirc_arena.messages import (CAMERA_DIRECTION_DOWNWARD, CAMERA_DIRECTION_FORWARD,  # noqa: E402,F401
+                                   CAMERA_DIRECTION_UNKNOWN)
 CAMERA_CONFIGS = {"FORWARD": CAMERA_DIRECTION_FORWARD, "DOWNWARD": CAMERA_DIRECTION_DOWNWARD}
 
 # A forward fire is only placed when the mean front laser range is under this (metres): beyond it the

@@ -5,15 +5,18 @@ import math
 from typing import Optional, Sequence, Tuple
 
 import numpy as np
+from mbzirc_arena.yaw import yaw_from_quaternion
 
 from fire_detector import constants as C
 
 Vec3 = Tuple[float, float, float]
 
 
-def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
-    """Yaw (rad) of a quaternion; the thermal geometry only uses the heading of the UAV."""
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+def uav_heading(x: float, y: float, z: float, w: float) -> float:
+    """Yaw (rad) of the UAV's orientation (the thermal geometry only uses its heading); 0 for the all-zero
+    quaternion of a pose that carries no orientation."""
+    yaw = yaw_from_quaternion(x, y, z, w)
+    return 0.0 if yaw is None else yaw
 
 
 def front_laser_range(

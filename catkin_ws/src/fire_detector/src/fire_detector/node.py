@@ -15,7 +15,7 @@ from std_msgs.msg import Float64MultiArray
 
 from fire_detector import constants as C
 from fire_detector.detector import DetectorConfig, FireDetector, FrameResult
-from fire_detector.geometry import front_laser_range, yaw_from_quaternion
+from fire_detector.geometry import front_laser_range, uav_heading
 
 THROTTLE_S = 5.0
 DEBUG_IMAGE_SCALE = 8
@@ -81,7 +81,7 @@ class FireDetectorNode:
             rospy.logerr_throttle(THROTTLE_S, "fire_detector: non-finite ual/pose ignored")
             return
         with self.lock:
-            self.pose = ((p.x, p.y, p.z + self.camera_height), yaw_from_quaternion(q.x, q.y, q.z, q.w))
+            self.pose = ((p.x, p.y, p.z + self.camera_height), uav_heading(q.x, q.y, q.z, q.w))
 
     def on_scan(self, msg: LaserScan) -> None:
         rng = front_laser_range(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,

@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from fire_detector import constants as C
-from fire_detector.geometry import (downward_fire_position, forward_fire_position, front_laser_range,
-                                    yaw_from_quaternion)
+from fire_detector.geometry import downward_fire_position, forward_fire_position, front_laser_range, uav_heading
 
 INC = 2 * math.pi / 720
 
@@ -45,8 +44,9 @@ def test_no_valid_beam_or_bad_increment_gives_none():
     assert front_laser_range([], -math.pi, INC, 0.15, 25.0, 5.0) is None
 
 
-def test_yaw_from_quaternion():
-    assert yaw_from_quaternion(0, 0, math.sin(0.4), math.cos(0.4)) == pytest.approx(0.8)
+def test_uav_heading_and_a_pose_without_orientation():
+    assert uav_heading(0, 0, math.sin(0.4), math.cos(0.4)) == pytest.approx(0.8)
+    assert uav_heading(0, 0, 0, 0) == 0.0
 
 
 def test_forward_centre_pixel_is_straight_ahead():
