@@ -97,7 +97,8 @@ THERMAL_OFFSET_FORWARD = (0.2, 0.0, 0.0)
 THERMAL_OFFSET_DOWNWARD = (0.0, 0.0, -0.1)
 
 # --- rates and trial ---
-PUB_RATE = 30.0            # Hz: pose, velocity, odom, state, TF
+PUB_RATE = 30.0            # Hz: pose, velocity, odom, TF
+STATE_KEEPALIVE_S = 1.0    # s: ual/state is sent when it changes, and at least this often (sim time)
 SIM_RATE = 30.0            # Hz: physics ticks
 CLOCK_RATE = 100.0         # Hz of wall time at most for /clock (one per tick)
 TRIAL_DURATION = 1200.0    # s

@@ -51,6 +51,11 @@ def logerr_throttled(key: str, period: float, text: str) -> None:
         rospy.logerr(text)
 
 
+def set_point(p, x: float, y: float, z: float) -> None:
+    """Fill a Point / Vector3 in place (no new message object per tick)."""
+    p.x, p.y, p.z = x, y, z
+
+
 def yaw_quat(yaw: float) -> Quaternion:
     return Quaternion(0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
 
@@ -86,7 +91,9 @@ class RobotIO:
         self.pub_pose = p("ual/pose", PoseStamped)
         self.pub_vel = p("ual/velocity", TwistStamped)
         self.pub_odom = p("ual/odom", Odometry)
-        self.pub_state = p("ual/state", State)
+        # latched: published when the state changes (and every STATE_KEEPALIVE_S), a late subscriber still
+        # gets the current state at once
+        self.pub_state = p("ual/state", State, latch=True)
         self.pub_water = p("actuators_system/water_level", Float32)
         self.pub_blanket = p("actuators_system/blanket_attached", Bool)
         self.has_laser = node.params["laser"]
@@ -121,10 +128,14 @@ class RobotIO:
         ]
         self.subs = [rospy.Subscriber(f"{ns}/ual/set_velocity", TwistStamped, self.on_set_velocity, queue_size=1),
                      rospy.Subscriber(f"{ns}/ual/set_pose", PoseStamped, self.on_set_pose, queue_size=1)]
-        # reusable messages
+        # reusable messages (rospy serialises in publish(), so they can be filled again at the next tick)
         self.m_pose, self.m_vel, self.m_odom, self.m_state = PoseStamped(), TwistStamped(), Odometry(), State()
         self.m_pose.header.frame_id = self.m_vel.header.frame_id = self.m_odom.header.frame_id = C.FRAME_ARENA
         self.m_odom.child_frame_id = self.frame
+        self.m_tf = TransformStamped()
+        self.m_tf.header.frame_id = f"{ns}/odom" if node.params["tf_odom"] else C.FRAME_ARENA
+        self.m_tf.child_frame_id = self.frame
+        self.state_sent = (None, -math.inf)    # state and sim time of the last ual/state
 
     # ------------------------------------------------------------------ services
     def _log_refusal(self, what: str, msg: str) -> None:
@@ -226,7 +237,7 @@ class RobotIO:
             if self.pub_pose.get_num_connections():
                 m = self.m_pose
                 m.header.stamp = stamp
-                m.pose.position = Point(x, y, z)
+                set_point(m.pose.position, x, y, z)
                 m.pose.orientation = q
                 self.pub_pose.publish(m)
             if self.pub_vel.get_num_connections():
@@ -244,14 +255,15 @@ class RobotIO:
                 m.twist.twist.linear = Vector3(c * r.vel[0] + s * r.vel[1], -s * r.vel[0] + c * r.vel[1], r.vel[2])
                 m.twist.twist.angular = Vector3(0.0, 0.0, r.yaw_rate)
                 self.pub_odom.publish(m)
-            if self.pub_state.get_num_connections():
+            last_state, last_time = self.state_sent
+            if (r.state != last_state or not last_time <= now < last_time + C.STATE_KEEPALIVE_S) \
+                    and self.pub_state.get_num_connections():
                 self.m_state.state = r.state
                 self.pub_state.publish(self.m_state)
-            tf = TransformStamped()
+                self.state_sent = (r.state, now)
+            tf = self.m_tf
             tf.header.stamp = stamp
-            tf.header.frame_id = f"{self.ns}/odom" if self.node.params["tf_odom"] else C.FRAME_ARENA
-            tf.child_frame_id = self.frame
-            tf.transform.translation = Vector3(x, y, z)
+            set_point(tf.transform.translation, x, y, z)
             tf.transform.rotation = q
         if self.due_actuators(now):
             if self.pub_water.get_num_connections():
