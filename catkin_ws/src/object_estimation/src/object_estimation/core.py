@@ -61,6 +61,7 @@ class Track:
     sub_type: int = C.SUBTYPE_UNKNOWN
     scale: tuple = (0.0, 0.0, 0.0)
     agents: set = field(default_factory=set)
+    born: int = 0                        # creation order (never wraps): the older of two merged tracks survives
 
 
 def floor_covariance(cov: np.ndarray, min_var: float) -> np.ndarray:
@@ -117,6 +118,11 @@ class ObjectEstimator:
         self.buildings = [tuple(b) for b in buildings]
         self.tracks: Dict[int, Track] = {}
         self._next_id = 1
+        self._born = 0
+        # spatial index: (type, grid cell) -> ids; a cell is as wide as the type's widest gate, so every
+        # track a detection may go to lies in the 27 cells around it (association in O(1), not O(tracks):
+        # 10 000 scattered detections made every /estimated_objects wait minutes behind the lock)
+        self._index: Dict[tuple, set] = {}
 
     # ---- updates ----------------------------------------------------------------------------------
     def add(self, det: Detection) -> Track:
@@ -127,14 +133,15 @@ class ObjectEstimator:
         r = sane_covariance(det.covariance, self.default_cov)
         track = self._associate(det.type, z, r)
         if track is None:
-            track = Track(id=self._next_id, type=det.type, position=z.copy(), covariance=r.copy(),
-                          first_seen=det.stamp, last_update=det.stamp, scale=tuple(det.scale))
-            self._next_id = self._next_id % 65535 + 1
+            self._born += 1
+            track = Track(id=self._allocate_id(), type=det.type, position=z.copy(), covariance=r.copy(),
+                          first_seen=det.stamp, last_update=det.stamp, scale=tuple(det.scale), born=self._born)
             self.tracks[track.id] = track
+            self._index_add(track)
         else:
             p = track.covariance + np.eye(3) * self.process_noise
             k = p @ np.linalg.inv(p + r)
-            track.position = track.position + k @ (z - track.position)
+            self._move(track, track.position + k @ (z - track.position))
             track.covariance = (np.eye(3) - k) @ p
             track.num_updates += 1
             track.last_update = max(track.last_update, det.stamp)
@@ -149,12 +156,62 @@ class ObjectEstimator:
                 track.status = C.STATUS_ACTIVE
         return track
 
+    # ---- ids and the spatial index --------------------------------------------------------------------
+    def _allocate_id(self) -> int:
+        """The next id not held by a live track (ids wrap at 65535, the original's uint16): an id the central
+        unit knows must never name another object. ValueError when all 65535 are in use."""
+        for _ in range(65535):
+            tid = self._next_id
+            self._next_id = self._next_id % 65535 + 1
+            if tid not in self.tracks:
+                return tid
+        raise ValueError('all 65535 track ids are in use')
+
+    def _cell_size(self, obj_type: int) -> float:
+        return max(self.gates.get(obj_type, self.default_gate), self.merge_distances.get(obj_type, 0.0), 1e-3)
+
+    def _cell(self, obj_type: int, p: np.ndarray) -> tuple:
+        size = self._cell_size(obj_type)
+        return (obj_type, int(np.floor(p[0] / size)), int(np.floor(p[1] / size)), int(np.floor(p[2] / size)))
+
+    def _index_add(self, t: Track) -> None:
+        self._index.setdefault(self._cell(t.type, t.position), set()).add(t.id)
+
+    def _index_remove(self, t: Track) -> None:
+        key = self._cell(t.type, t.position)
+        ids = self._index.get(key)
+        if ids is not None:
+            ids.discard(t.id)
+            if not ids:
+                del self._index[key]
+
+    def _move(self, t: Track, position: np.ndarray) -> None:
+        """Change a track's position, keeping the index right."""
+        self._index_remove(t)
+        t.position = position
+        self._index_add(t)
+
+    def _drop(self, t: Track) -> None:
+        self._index_remove(t)
+        del self.tracks[t.id]
+
+    def _near(self, obj_type: int, z: np.ndarray) -> List[Track]:
+        """Tracks of obj_type in the 27 cells around z: every one within a gate of z is among them."""
+        _, cx, cy, cz = self._cell(obj_type, z)
+        out = []
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for dz in (-1, 0, 1):
+                    for tid in self._index.get((obj_type, cx + dx, cy + dy, cz + dz), ()):
+                        out.append(self.tracks[tid])
+        return out
+
     def _gated(self, obj_type: int, z: np.ndarray, r: np.ndarray, exclude: int = -1) -> Optional[Track]:
         """The track of obj_type nearest to z (Mahalanobis) inside both gates, if any."""
         cap = self.gates.get(obj_type, self.default_gate)
         best, best_d2 = None, self.chi2_gate
-        for t in self.tracks.values():
-            if t.type != obj_type or t.id == exclude:
+        for t in sorted(self._near(obj_type, z), key=lambda t: t.id):
+            if t.id == exclude:
                 continue
             e = z - t.position
             if float(np.linalg.norm(e)) > cap:
@@ -183,18 +240,16 @@ class ObjectEstimator:
                             exclude=track.id)
         if other is None:
             md = self.merge_distances.get(track.type, 0.0)
-            near = [t for t in self.tracks.values() if t.type == track.type and t.id != track.id
-                    and float(np.linalg.norm(t.position - track.position)) < md]
+            near = [t for t in sorted(self._near(track.type, track.position), key=lambda t: t.id)
+                    if t.id != track.id and float(np.linalg.norm(t.position - track.position)) < md]
             other = min(near, key=lambda t: float(np.linalg.norm(t.position - track.position)), default=None)
         if other is None:
             return track
-        keep, gone = (other, track) if other.id < track.id else (track, other)
-        if abs(keep.id - gone.id) > 30000:          # ids wrapped around: the lower one is the newer
-            keep, gone = gone, keep
+        keep, gone = (other, track) if (other.born, other.id) < (track.born, track.id) else (track, other)
         info = np.linalg.inv(keep.covariance) + np.linalg.inv(gone.covariance)
         cov = np.linalg.inv(info)
-        keep.position = cov @ (np.linalg.solve(keep.covariance, keep.position)
-                               + np.linalg.solve(gone.covariance, gone.position))
+        self._move(keep, cov @ (np.linalg.solve(keep.covariance, keep.position)
+                                + np.linalg.solve(gone.covariance, gone.position)))
         keep.covariance = cov
         keep.num_updates += gone.num_updates
         keep.last_update = max(keep.last_update, gone.last_update)
@@ -202,7 +257,7 @@ class ObjectEstimator:
         keep.agents |= gone.agents
         if gone.status in STICKY and keep.status not in STICKY:
             keep.status = gone.status
-        del self.tracks[gone.id]
+        self._drop(gone)
         return keep
 
     def tick(self, now: float) -> None:
@@ -212,7 +267,7 @@ class ObjectEstimator:
             if now - t.last_update <= self.lost_time:
                 continue
             if t.status == C.STATUS_DETECTED and t.num_updates < self.min_updates:
-                del self.tracks[tid]
+                self._drop(t)
             elif t.status == C.STATUS_ACTIVE:
                 t.status = C.STATUS_LOST
 
@@ -236,7 +291,7 @@ class ObjectEstimator:
                             'covariance': [[float(v) for v in row] for row in t.covariance],
                             'first_seen': t.first_seen, 'last_update': t.last_update,
                             'num_updates': t.num_updates, 'status': t.status, 'sub_type': t.sub_type,
-                            'scale': [float(v) for v in t.scale], 'agents': sorted(t.agents)}
+                            'scale': [float(v) for v in t.scale], 'agents': sorted(t.agents), 'born': t.born}
                            for _, t in sorted(self.tracks.items())]}
 
     def load_state(self, state: Dict[str, Any]) -> None:
@@ -264,7 +319,7 @@ class ObjectEstimator:
                 tracks[tid] = Track(id=tid, type=int(d['type']), position=pos, covariance=0.5 * (cov + cov.T),
                                     first_seen=times[0], last_update=times[1], num_updates=n, status=status,
                                     sub_type=int(d['sub_type']), scale=tuple(float(v) for v in d['scale'][:3]),
-                                    agents={str(a) for a in d['agents']})
+                                    agents={str(a) for a in d['agents']}, born=int(d.get('born', 0)))
             next_id = int(state['next_id'])
             if not 1 <= next_id <= 65535:
                 raise ValueError(f'bad next id {next_id}')
@@ -272,7 +327,14 @@ class ObjectEstimator:
             raise ValueError(f'malformed tracks state: {type(e).__name__}: {e}') from e
         if tracks and max(tracks) >= next_id and max(tracks) - next_id < 30000:  # not wrapped: stay ahead
             next_id = max(tracks) % 65535 + 1
+        if not any(t.born for t in tracks.values()):       # a file of before `born`: creation order = id order
+            for k, tid in enumerate(sorted(tracks), 1):
+                tracks[tid].born = k
         self.tracks, self._next_id = tracks, next_id
+        self._born = max((t.born for t in tracks.values()), default=0)
+        self._index = {}
+        for t in tracks.values():
+            self._index_add(t)
 
     @property
     def next_id(self) -> int:

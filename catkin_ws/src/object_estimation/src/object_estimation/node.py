@@ -23,6 +23,7 @@ import numpy as np
 import rospy
 from mbzirc_comm_objs.msg import Object, ObjectDetectionList, ObjectList
 from mbzirc_comm_objs.srv import SetObjectStatus, SetObjectStatusResponse
+from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from mbzirc_arena import messages as C
 from . import store
@@ -61,7 +62,8 @@ class EstimatorNode:
         self.subs = [rospy.Subscriber(f'/mbzirc2020_{int(i)}/sensed_objects', ObjectDetectionList,
                                       self.on_detections, queue_size=20)
                      for i in rospy.get_param('~robot_ids', [0, 1, 2, 3])]
-        self.timer = rospy.Timer(rospy.Duration(1.0 / float(rospy.get_param('~rate', 5.0))), self.publish)
+        # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
+        self.timer = PeriodicTimer(1.0 / float(rospy.get_param('~rate', 5.0)), self.publish, 'estimator publish')
 
     # ---- persistence ------------------------------------------------------------------------------
     def _now_for_load(self) -> float:

@@ -122,3 +122,54 @@ def test_an_extinguished_fire_does_not_swallow_a_fire_next_to_it():
     # leftover heat right at the extinguished fire still goes to it (no duplicate track)
     est.add(det(facade + np.array([0.3, 0.0, 0.0]), t=5.0, cov=cov))
     assert len(est.objects()) == 2
+
+
+def test_ids_wrap_without_reusing_a_live_id():
+    est = ObjectEstimator(min_updates=1)
+    first = est.add(det((0, 0, 0))).id
+    est.set_status(first, C.STATUS_EXTINGUISHED)
+    est._next_id = 65535                                   # ids about to wrap (uint16, like the original)
+    a = est.add(det((100, 0, 0))).id
+    b = est.add(det((200, 0, 0))).id
+    assert (a, b) == (65535, 2), "id 1 is an EXTINGUISHED fire the central unit knows: skipped"
+    assert est.tracks[first].status == C.STATUS_EXTINGUISHED and np.allclose(est.tracks[first].position, 0)
+    assert len({a, b, first}) == 3 and len(est.tracks) == 3
+
+
+def test_merge_keeps_the_older_track_whatever_the_ids():
+    """Ids say nothing about age once they wrap or grow apart: track 10 (seen first) and track 40000 (made
+    later) are one object; 10 must survive (the old rule swapped any two ids more than 30000 apart)."""
+    def track(tid, x, born):
+        return {'id': tid, 'type': C.TYPE_FIRE, 'position': [x, 0.0, 0.0], 'covariance': (np.eye(3) * 0.01).tolist(),
+                'first_seen': 0.0, 'last_update': 0.0, 'num_updates': 3, 'status': C.STATUS_ACTIVE,
+                'sub_type': 0, 'scale': [0, 0, 0], 'agents': ['1'], 'born': born}
+    est = ObjectEstimator(min_updates=1)
+    est.load_state({'next_id': 40001, 'tracks': [track(10, 0.0, 1), track(40000, 1.0, 2)]})
+    est.add(det((0.5, 0, 0), t=1.0))
+    assert list(est.tracks) == [10]
+
+
+def _state_with_scattered_tracks(n):
+    rng = np.random.default_rng(1)
+    tracks = [{'id': i, 'type': C.TYPE_FIRE, 'position': list(rng.uniform(0, 5000, 3)),
+               'covariance': np.eye(3).tolist(), 'first_seen': 0.0, 'last_update': 0.0, 'num_updates': 1,
+               'status': C.STATUS_DETECTED, 'sub_type': 0, 'scale': [0, 0, 0], 'agents': ['1']}
+              for i in range(1, n + 1)]
+    return {'next_id': n + 1, 'tracks': tracks}
+
+
+def test_association_cost_does_not_grow_with_the_number_of_tracks():
+    """10 000 scattered tracks (a detection flood) must not make each detection scan them all (the old
+    association was O(tracks) per detection under the node's lock: /estimated_objects stalled for minutes)."""
+    import time
+    timings = {}
+    for n in (100, 10000):
+        est = ObjectEstimator()
+        est.load_state(_state_with_scattered_tracks(n))
+        rng = np.random.default_rng(2)
+        points = rng.uniform(0, 5000, (300, 3))
+        start = time.perf_counter()
+        for p in points:
+            est.add(det(p))
+        timings[n] = time.perf_counter() - start
+    assert timings[10000] < 5 * timings[100] + 0.05, timings
