@@ -1,5 +1,6 @@
 # The project's commands. Every target first runs the idempotent setup (apt, venv, catkin_make).
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
+#                  UNCERTAINTY=realistic (GNSS error, unknown water and heat, laser dropouts; default ideal)
 #                  GCS=0 (no web ground station; it is on http://127.0.0.1:8088/ by default)  GCS_PORT=
 #   make replay BAG=results/.../mission.bag   replay a recorded trial on the ground station page  GCS_PORT=
 #   make test      run every test (pytest unit tests + rostest integration tests + the short fault suite)
@@ -17,6 +18,7 @@ PKGS ?=
 GCS ?= 1
 GCS_PORT ?= 8088
 BAG ?=
+UNCERTAINTY ?= ideal
 
 .PHONY: setup build mission replay test test-faults bench lint clean
 setup:
@@ -26,7 +28,7 @@ build: setup
 
 mission: setup
 	@bash tools/run_mission.sh SEED=$(SEED) UAVS=$(UAVS) RTF=$(RTF) RECORD=$(RECORD) SUMMARY=$(SUMMARY) \
-	  GCS=$(GCS) GCS_PORT=$(GCS_PORT)
+	  GCS=$(GCS) GCS_PORT=$(GCS_PORT) UNCERTAINTY=$(UNCERTAINTY)
 
 replay: setup
 	@[ -n "$(BAG)" ] || { echo "usage: make replay BAG=results/<mission>/mission.bag [GCS_PORT=8088]" >&2; exit 2; }

@@ -2,21 +2,24 @@
 # Runs one simulated Challenge 3 trial (c3_sim.launch) headless and shows its progress in the terminal:
 #   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
 #                        [GCS=1] [GCS_PORT=8088]   (GCS=0: no web ground station)
+#                        [UNCERTAINTY=ideal|realistic]   (the trial's uncertainty, ual_sim README)
 # Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
 # mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
 # port so it never clashes with another roscore on this machine.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088
+SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
 SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
-    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*) declare "$kv" ;;
+    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*) declare "$kv" ;;
     *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
   esac
 done
 [[ "$SEED" =~ ^[0-9]+$ && "$UAVS" =~ ^[0-3]$ && "$RTF" =~ ^[0-9]+([.][0-9]+)?$ ]] \
   || { echo "run_mission.sh: SEED must be an integer, UAVS 0..3, RTF a number" >&2; exit 2; }
+[[ "$UNCERTAINTY" =~ ^(ideal|realistic)$ ]] \
+  || { echo "run_mission.sh: UNCERTAINTY must be ideal or realistic, got '$UNCERTAINTY'" >&2; exit 2; }
 record=false; [ "$RECORD" = 1 ] || [ "$RECORD" = true ] && record=true
 smach_debug=false; [ "$SMACH_DEBUG" = 1 ] || [ "$SMACH_DEBUG" = true ] && smach_debug=true
 # shellcheck disable=SC1091
@@ -29,11 +32,11 @@ PORT="$(python -c 'import socket; s=socket.socket(); s.bind(("localhost", 0)); p
 export ROS_MASTER_URI="http://localhost:$PORT" ROS_HOSTNAME=localhost
 export ROS_LOG_DIR="$OUT/ros_logs"
 LOG="$OUT/launch.log"
-echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, record $record -> $OUT (master port $PORT)"
+echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, record $record -> $OUT (master port $PORT)"
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
-  duration:="$DURATION" smach_debug:="$smach_debug" > "$LOG" 2>&1 &
+  duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
 GCS_PID=""
 if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own launch: it never ends the trial)

@@ -39,8 +39,12 @@ class JetResult:
     share: float = 0.0
 
 
-def shoot(world: World, fires: FireSet, nozzle: np.ndarray, direction: np.ndarray) -> JetResult:
-    """Trace the jet from the nozzle and find the fire container it feeds, if any."""
+def shoot(world: World, fires: FireSet, nozzle: np.ndarray, direction: np.ndarray,
+          spot_factor: float = 1.0, drop_per_m2: float = 0.0) -> JetResult:
+    """Trace the jet from the nozzle and find the fire container it feeds, if any.
+
+    spot_factor scales the spot's growth per metre and drop_per_m2 lowers where it lands by that times the
+    distance squared (the trial's unknowns, uncertainty.py; 1 and 0 = the nominal jet)."""
     t, idx = world.raycast(nozzle, direction[None, :], C.JET_RANGE,
                            boxes=world.boxes_near(nozzle, C.JET_RANGE + 0.5), ground=True)
     t0, i0 = float(t[0]), int(idx[0])
@@ -49,7 +53,9 @@ def shoot(world: World, fires: FireSet, nozzle: np.ndarray, direction: np.ndarra
     end = nozzle + direction * t0
     if i0 == HIT_GROUND:
         return JetResult(end, False)
-    spot = C.JET_SPREAD_R0 + C.JET_SPREAD_PER_M * t0
+    if drop_per_m2:
+        end = end - np.array([0.0, 0.0, drop_per_m2 * t0 * t0])
+    spot = C.JET_SPREAD_R0 + C.JET_SPREAD_PER_M * spot_factor * t0
     best, share = None, 0.0
     for i in fires.water_idx:
         c, n = fires.pos[i], fires.normal[i]

@@ -26,6 +26,7 @@ class Fire:
     litres: float = 0.0
     covered: bool = False
     extinguish_time: float = -1.0
+    litres_needed: float = C.LITRES_PER_FIRE   # per fire: the trial's uncertainty may scale it (uncertainty.py)
 
     @property
     def progress(self) -> float:
@@ -34,7 +35,7 @@ class Fire:
             return 0.0
         if self.kind == GROUND:
             return 1.0 if self.covered else 0.0
-        return min(1.0, self.litres / C.LITRES_PER_FIRE)
+        return min(1.0, self.litres / self.litres_needed)
 
     @property
     def extinguished(self) -> bool:

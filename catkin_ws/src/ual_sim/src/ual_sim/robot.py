@@ -50,6 +50,9 @@ class Robot:
         self.refills = 0
         self.wind = np.zeros(2)
         self.wind_error = np.zeros(2)     # position error the gusts cause (bounded by the controller)
+        # GNSS bias of the reported pose (uncertainty.py): waypoints are commanded in the reported frame, so
+        # the true set-point is the command minus this (Simulation keeps it and shifts goals as it wanders)
+        self.gnss_bias = np.zeros(3)
         self.radius = C.UAV_RADIUS if self.is_uav else C.UGV_RADIUS
         self.body_offset = C.UAV_BODY_OFFSET_Z if self.is_uav else C.UGV_BODY_OFFSET_Z
         self.max_vxy = C.UAV_MAX_VXY if self.is_uav else C.UGV_MAX_V
@@ -136,7 +139,7 @@ class Robot:
             return ok
         if self.is_uav and self.state not in (C.FLYING_AUTO, C.FLYING_MANUAL):
             return False, f"go_to_waypoint refused: robot {self.id} is not flying (state {self.state})"
-        self.goal = np.array([x, y, z if self.is_uav else self.pos[2]])
+        self.goal = np.array([x, y, z if self.is_uav else self.pos[2]]) - self.gnss_bias * (1.0, 1.0, self.is_uav)
         self.goal_yaw = wrap(yaw)
         self.mode = "goto"
         if self.is_uav:

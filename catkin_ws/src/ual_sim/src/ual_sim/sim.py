@@ -5,6 +5,7 @@ speed, and benchmarks can time the sensor models alone.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from .fires import FireSet
 from .rgbd import RGBDCamera
 from .robot import Robot
 from .thermal import DOWNWARD, FORWARD, ThermalCamera
+from .uncertainty import TrialUncertainty, UncertaintyConfig
 from .world import World
 
 FAULT_KINDS = ("crash", "comm_loss", "sensor_failure")
@@ -40,12 +42,27 @@ class Blanket:
 class Simulation:
     """All state of a trial. Every public method must be called with `self.lock` held (the node does)."""
 
-    def __init__(self, world: World, seed: int = 0, pose_noise_std: float = 0.0, wind: bool = True):
-        self.world = world
+    def __init__(self, world: World, seed: int = 0, pose_noise_std: float = 0.0, wind: bool = True,
+                 uncertainty: Optional[UncertaintyConfig] = None):
         self.seed = seed
         self.rng = np.random.default_rng(seed + 1000)
         self.fires = FireSet(world, seed)
+        # the trial's uncertainty (None or `ideal`: none, exactly the simulator without it)
+        cfg = uncertainty if uncertainty is not None and not uncertainty.is_ideal else None
+        self.uncertainty = None if cfg is None else TrialUncertainty(
+            cfg, seed, [r.id for r in world.robots], len(self.fires.fires), world.bmin, world.bmax,
+            world.box_temp, world.box_building or [""] * len(world.bmin))
+        if self.uncertainty is not None:
+            unk = self.uncertainty.unknowns
+            if unk.box_temp is not None:
+                world = dataclasses.replace(world, box_temp=unk.box_temp)
+            for f, k in zip(self.fires.fires, unk.water_factor):
+                f.litres_needed = C.LITRES_PER_FIRE * float(k)
+        self.world = world
         self.robots: dict[int, Robot] = {s.id: Robot(s, world) for s in world.robots}
+        if self.uncertainty is not None:
+            for r in self.robots.values():
+                r.gnss_bias = self.uncertainty.gnss_bias(r.id).copy()
         self.time = 0.0
         self.lock = threading.RLock()
         self.pose_noise_std = pose_noise_std
@@ -62,6 +79,8 @@ class Simulation:
         """Advance everything by dt seconds of sim time."""
         self.time += dt
         rng = self.rng if self.wind else _NO_WIND
+        if self.uncertainty is not None and self.uncertainty.gnss:
+            self._follow_gnss_bias(dt)
         for r in self.robots.values():
             before = r.refills
             r.step(dt, self.time, rng)
@@ -72,7 +91,9 @@ class Simulation:
             litres = r.pump(dt)
             if litres > 0.0:
                 p, d = r.nozzle()
-                jet = shoot(self.world, self.fires, p, d)
+                unk = self.uncertainty.unknowns if self.uncertainty is not None else None
+                jet = shoot(self.world, self.fires, p, d) if unk is None else shoot(
+                    self.world, self.fires, p, d, unk.jet_spot_factor, unk.jet_drop_per_m2)
                 self.jets[r.id] = jet
                 if jet.fire is not None and jet.share > 0.0:
                     was = self.fires.fires[jet.fire].extinguished
@@ -84,6 +105,19 @@ class Simulation:
                 r.pump_on = False
                 self.events.append(Event(self.time, f"robot {r.id}: tank empty, pump stopped"))
         self._collisions()
+
+    def _follow_gnss_bias(self, dt: float) -> None:
+        """Every robot's GNSS bias wanders; a controller that holds or flies to a set-point in the reported
+        frame moves its true set-point by minus that change (a landing keeps its height, the UGV its z)."""
+        for rid, delta in self.uncertainty.step_gnss(dt).items():
+            r = self.robots[rid]
+            r.gnss_bias = self.uncertainty.gnss_bias(rid).copy()
+            if r.crashed:
+                continue
+            if r.is_uav and r.flying and r.mode in ("goto", "idle", "takeoff"):
+                r.goal = r.goal - delta
+            elif (r.is_uav and r.mode == "land") or (not r.is_uav and r.mode == "goto"):
+                r.goal = r.goal - delta * (1.0, 1.0, 0.0)
 
     def _collisions(self) -> None:
         alive = [r for r in self.robots.values() if not r.crashed]
@@ -183,6 +217,8 @@ class Simulation:
         p = np.array([r.pos[0], r.pos[1], r.pos[2], r.yaw])
         if self.pose_noise_std > 0.0 and not r.crashed:
             p[:3] += self.rng.normal(0.0, self.pose_noise_std, 3)
+        if self.uncertainty is not None and self.uncertainty.gnss:
+            p[:3] += self.uncertainty.gnss_fix(r.id)   # GNSS error (a crashed robot's receiver still reports)
         return p
 
     def _cached(self, r: Robot, sensor: str, fn):
@@ -197,12 +233,20 @@ class Simulation:
 
     def laser(self, r: Robot) -> np.ndarray:
         lz = r.pos[2] + r.laser_z + C.LASER_OFFSET[2]
-        return self._cached(r, "laser", lambda: self.world.laser_scan(r.pos[0], r.pos[1], lz, r.yaw))
+        clean = self._cached(r, "laser", lambda: self.world.laser_scan(r.pos[0], r.pos[1], lz, r.yaw))
+        if self.uncertainty is None:
+            return clean
+        return self.uncertainty.scan(clean, C.LASER_RANGE_MIN, C.LASER_RANGE_MAX)
 
     def thermal_frame(self, r: Robot, direction: int) -> np.ndarray:
         cam = self.thermal[direction]
         clean = self._cached(r, f"thermal{direction}",
                              lambda: cam.render_clean(self.world, self.fires, r.sensor_base(), r.yaw))
+        if self.uncertainty is not None:     # this camera's own noise and calibration offset (uncertainty.py)
+            unk = self.uncertainty.unknowns
+            std = unk.thermal_noise_std.get(r.id, cam.noise_std)
+            frame = clean + unk.thermal_offset.get(r.id, 0.0)
+            return frame + self.rng.normal(0.0, std, clean.shape) if std > 0 else frame
         return clean + self.rng.normal(0.0, cam.noise_std, clean.shape) if cam.noise_std > 0 else clean
 
     def rgbd_frame(self, r: Robot) -> tuple[np.ndarray, np.ndarray]:

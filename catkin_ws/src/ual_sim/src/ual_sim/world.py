@@ -65,6 +65,8 @@ class World:
     floors: list = field(default_factory=lambda: [0.0, 5.0, 10.0])
     active_ids: Optional[list] = None   # explicit active holder ids (overrides the seed's choice)
     trial_duration: float = C.TRIAL_DURATION
+    box_building: list = field(default_factory=list)   # (B,) building tag of each box ("" = the simulator's)
+    uncertainty: dict = field(default_factory=dict)    # the world file's `uncertainty:` profiles (uncertainty.py)
 
     # ------------------------------------------------------------------ queries
     def inside_arena(self, p: Sequence[float], margin: float = 0.0) -> bool:
@@ -351,7 +353,7 @@ def parse_world(data: Any, n_uavs: Optional[int] = None, ugv: bool = True) -> Wo
         floors = [float(f) for f in floors]
     except (TypeError, ValueError) as e:
         raise WorldError("floors: must be a list of heights") from e
-    lo, hi, names, temps, colors = [], [], [], [], []
+    lo, hi, names, temps, colors, tags = [], [], [], [], [], []
     for section in ("walls", "boxes"):
         raw = data.get(section) or []
         if not isinstance(raw, list):
@@ -372,6 +374,7 @@ def parse_world(data: Any, n_uavs: Optional[int] = None, ugv: bool = True) -> Wo
                 names.append(str(b.get("name", f"{section}_{i}")))
                 temps.append(temp)
                 colors.append(color)
+                tags.append(str(b.get("building", "") or ""))
     robots = []
     raw_robots = data.get("robots") or []
     if not isinstance(raw_robots, list):
@@ -423,7 +426,8 @@ def parse_world(data: Any, n_uavs: Optional[int] = None, ugv: bool = True) -> Wo
         ground_holders=_holders(data.get("ground_holders"), "ground", floors),
         robots=robots, active={k: int(v) for k, v in active.items()}, floors=floors,
         active_ids=[str(i) for i in active_ids] if active_ids is not None else None,
-        trial_duration=float(data.get("trial_duration", C.TRIAL_DURATION)))
+        trial_duration=float(data.get("trial_duration", C.TRIAL_DURATION)), box_building=tags,
+        uncertainty=data.get("uncertainty") or {})
     if world.active_ids is not None:
         known = {h.id for h in world.facade_holders + world.indoor_holders + world.ground_holders}
         unknown = sorted(set(world.active_ids) - known)

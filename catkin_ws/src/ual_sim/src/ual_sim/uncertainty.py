@@ -1,0 +1,307 @@
+"""The trial's uncertainty: what the real arena did not tell the robots, chosen per trial (`~uncertainty`).
+
+Profiles live in the `uncertainty:` section of the world file; `ideal` is empty (every model off, the
+simulator behaves exactly as without this module and draws no extra random numbers), `realistic` holds
+the numbers of the ual_sim README ("Uncertainty", with where each comes from). Three kinds of models:
+
+- GNSS error of every robot's reported pose: a first-order Gauss-Markov bias per robot and axis plus white
+  noise. The robot's controller closes its loop on the reported pose, so a commanded waypoint is reached in
+  the *believed* frame: the true position ends up offset by minus the bias (Simulation shifts the true
+  set-point as the bias wanders). Collisions, water and the score use the truth.
+- per-seed physical unknowns: water a fire needs, the jet's spot size and drop, sun-heated wall
+  temperatures (the sun-facing side hotter), each thermal camera's noise and offset.
+- laser range noise and dropouts (NaN and inf beams).
+
+Why a separate random generator: `ideal` must reproduce today's trials bit for bit, so the uncertainty
+never draws from the simulation's own generator.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Optional, Sequence
+
+import numpy as np
+
+PROFILES = ("ideal", "realistic")
+
+
+class UncertaintyError(ValueError):
+    """A malformed uncertainty section or an unknown profile; the message names the entry."""
+
+
+def _num(section: Mapping, key: str, where: str, default: float) -> float:
+    v = section.get(key, default)
+    try:
+        v = float(v)
+    except (TypeError, ValueError) as e:
+        raise UncertaintyError(f"{where}.{key}: must be a number, got {v!r}") from e
+    if not math.isfinite(v) or v < 0.0 and not key.startswith(("offset", "drop")):
+        raise UncertaintyError(f"{where}.{key}: must be a finite number >= 0, got {v!r}")
+    return v
+
+
+def _range(section: Mapping, key: str, where: str, default: Sequence[float]) -> tuple[float, float]:
+    v = section.get(key, default)
+    try:
+        lo, hi = (float(x) for x in v)
+    except (TypeError, ValueError) as e:
+        raise UncertaintyError(f"{where}.{key}: must be [low, high], got {v!r}") from e
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+        raise UncertaintyError(f"{where}.{key}: must be finite with low <= high, got {v!r}")
+    return lo, hi
+
+
+# ---------------------------------------------------------------------------------------------- GNSS
+@dataclass(frozen=True)
+class GnssConfig:
+    """Standard (non-RTK) GNSS position error: per-axis Gauss-Markov bias std (m), its correlation time (s),
+    and white noise std (m) added to every reported pose."""
+    bias_xy_std: float = 0.0
+    bias_z_std: float = 0.0
+    tau: float = 30.0
+    white_xy_std: float = 0.0
+    white_z_std: float = 0.0
+
+    @property
+    def enabled(self) -> bool:
+        return max(self.bias_xy_std, self.bias_z_std, self.white_xy_std, self.white_z_std) > 0.0
+
+
+class GaussMarkov:
+    """First-order Gauss-Markov (Ornstein-Uhlenbeck) process per axis: stationary std `std`, correlation
+    time `tau`. Exact discretisation: x' = a x + sqrt(1 - a^2) std w, a = exp(-dt / tau); it starts from its
+    stationary distribution (a receiver that has been on for a while)."""
+
+    def __init__(self, std: np.ndarray, tau: float, rng: np.random.Generator):
+        self.std = np.asarray(std, dtype=float)
+        self.tau = float(tau)
+        self.rng = rng
+        self.value = self.std * rng.standard_normal(self.std.shape)
+
+    def step(self, dt: float) -> np.ndarray:
+        a = math.exp(-dt / self.tau) if self.tau > 0 else 0.0
+        self.value = a * self.value + math.sqrt(max(0.0, 1.0 - a * a)) * self.std * self.rng.standard_normal(
+            self.std.shape)
+        return self.value
+
+
+class GnssError:
+    """The GNSS error of one robot: the slowly wandering bias and the white noise of each fix."""
+
+    def __init__(self, cfg: GnssConfig, rng: np.random.Generator):
+        self.cfg = cfg
+        self.rng = rng
+        self.bias = GaussMarkov(np.array([cfg.bias_xy_std, cfg.bias_xy_std, cfg.bias_z_std]), cfg.tau, rng)
+        self.white_std = np.array([cfg.white_xy_std, cfg.white_xy_std, cfg.white_z_std])
+
+    def step(self, dt: float) -> np.ndarray:
+        """Advance the bias by dt; returns its change (the shift of the true set-point is minus that)."""
+        before = self.bias.value.copy()
+        return self.bias.step(dt) - before
+
+    def fix(self) -> np.ndarray:
+        """Error of one reported position: bias + white noise (x, y, z)."""
+        return self.bias.value + self.white_std * self.rng.standard_normal(3)
+
+
+# ---------------------------------------------------------------------------------------------- laser
+@dataclass(frozen=True)
+class LaserConfig:
+    """Range noise std = max(range_std_min, range_std_frac * range); dropouts: a beam reads NaN (no valid
+    return) or inf (no echo) with these probabilities."""
+    range_std_frac: float = 0.0
+    range_std_min: float = 0.0
+    nan_rate: float = 0.0
+    inf_rate: float = 0.0
+
+    @property
+    def enabled(self) -> bool:
+        return max(self.range_std_frac, self.range_std_min, self.nan_rate, self.inf_rate) > 0.0
+
+
+def corrupt_scan(ranges: np.ndarray, cfg: LaserConfig, rng: np.random.Generator,
+                 range_min: float, range_max: float) -> np.ndarray:
+    """A noisy copy of a clean scan: Gaussian range noise on finite beams (kept within [range_min,
+    range_max]), then NaN and inf dropouts."""
+    out = np.array(ranges, dtype=float, copy=True)
+    fin = np.isfinite(out)
+    std = np.maximum(cfg.range_std_min, cfg.range_std_frac * np.where(fin, out, 0.0))
+    out[fin] = np.clip(out[fin] + std[fin] * rng.standard_normal(int(fin.sum())), range_min, range_max)
+    u = rng.random(out.shape)
+    out[u < cfg.nan_rate] = np.nan
+    out[(u >= cfg.nan_rate) & (u < cfg.nan_rate + cfg.inf_rate)] = np.inf
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- physics
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Ranges the per-seed unknowns are drawn from (uniform); None = that model is off."""
+    fire_water_factor: Optional[tuple] = None     # x the nominal litres a fire needs, per fire
+    jet_spot_factor: Optional[tuple] = None       # x the spot growth per metre, per trial
+    jet_drop_per_m2: Optional[tuple] = None       # m the spot lands below the axis per m^2 flown, per trial
+    wall_base_temp: Optional[tuple] = None        # deg C of the shaded sun-heated surfaces, per trial
+    wall_sun_gain: float = 0.0                    # deg C added on a surface facing the sun squarely
+    wall_temp_limits: tuple = (35.0, 55.0)        # deg C: every sun-heated surface stays within
+    sun_azimuth_deg: tuple = (110.0, 250.0)       # from arena +y (north) towards +x (east)
+    sun_elevation_deg: tuple = (30.0, 55.0)
+    thermal_noise_std: Optional[tuple] = None     # deg C per camera
+    thermal_offset: Optional[tuple] = None        # deg C per camera (calibration offset)
+
+
+@dataclass
+class Unknowns:
+    """What one seed drew (the referee may log it; robots never read it)."""
+    water_factor: np.ndarray                      # (F,) per fire of the FireSet
+    jet_spot_factor: float = 1.0
+    jet_drop_per_m2: float = 0.0
+    box_temp: Optional[np.ndarray] = None         # (B,) wall temperatures, None = the world file's
+    sun: Optional[np.ndarray] = None              # unit vector towards the sun
+    thermal_noise_std: dict = field(default_factory=dict)   # robot id -> deg C
+    thermal_offset: dict = field(default_factory=dict)      # robot id -> deg C
+
+
+def sun_heated_normals(bmin: np.ndarray, bmax: np.ndarray, buildings: Sequence[str]) -> np.ndarray:
+    """(B, 3) outward unit normals of the sun-heated surfaces (boxes tagged with a building; zero for the
+    others): the box's thinnest axis, pointing away from its building's centre (roofs: up)."""
+    n = np.zeros((len(bmin), 3))
+    tags = np.asarray(list(buildings), dtype=object)
+    for name in {b for b in buildings if b}:
+        sel = np.nonzero(tags == name)[0]
+        centre = 0.5 * (bmin[sel].min(axis=0) + bmax[sel].max(axis=0))
+        for i in sel:
+            ext = bmax[i] - bmin[i]
+            k = int(np.argmin(ext))
+            if k == 2:
+                n[i, 2] = 1.0
+            else:
+                mid = 0.5 * (bmin[i, k] + bmax[i, k])
+                n[i, k] = 1.0 if mid >= centre[k] else -1.0
+    return n
+
+
+def draw_unknowns(cfg: PhysicsConfig, rng: np.random.Generator, n_fires: int, robot_ids: Sequence[int],
+                  bmin: np.ndarray, bmax: np.ndarray, box_temp: np.ndarray,
+                  buildings: Sequence[str]) -> Unknowns:
+    """One seed's physical unknowns, drawn in a fixed order (every model draws even when another is off
+    would change nothing: each draws only when on)."""
+    u = rng.uniform
+    out = Unknowns(water_factor=np.ones(n_fires))
+    if cfg.fire_water_factor is not None:
+        out.water_factor = u(*cfg.fire_water_factor, size=n_fires)
+    if cfg.jet_spot_factor is not None:
+        out.jet_spot_factor = float(u(*cfg.jet_spot_factor))
+    if cfg.jet_drop_per_m2 is not None:
+        out.jet_drop_per_m2 = float(u(*cfg.jet_drop_per_m2))
+    if cfg.wall_base_temp is not None:
+        az, el = math.radians(u(*cfg.sun_azimuth_deg)), math.radians(u(*cfg.sun_elevation_deg))
+        sun = np.array([math.sin(az) * math.cos(el), math.cos(az) * math.cos(el), math.sin(el)])
+        normals = sun_heated_normals(bmin, bmax, buildings)
+        heated = np.any(normals != 0.0, axis=1)
+        base = float(u(*cfg.wall_base_temp))
+        temps = base + cfg.wall_sun_gain * np.clip(normals @ sun, 0.0, None)
+        lo, hi = cfg.wall_temp_limits
+        out.box_temp = np.where(heated, np.clip(temps, lo, hi), box_temp)
+        out.sun = sun
+    for rid in robot_ids:
+        if cfg.thermal_noise_std is not None:
+            out.thermal_noise_std[rid] = float(u(*cfg.thermal_noise_std))
+        if cfg.thermal_offset is not None:
+            out.thermal_offset[rid] = float(u(*cfg.thermal_offset))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- profile
+@dataclass(frozen=True)
+class UncertaintyConfig:
+    """One profile of the world file's `uncertainty:` section."""
+    name: str = "ideal"
+    gnss: GnssConfig = GnssConfig()
+    laser: LaserConfig = LaserConfig()
+    physics: PhysicsConfig = PhysicsConfig()
+
+    @property
+    def is_ideal(self) -> bool:
+        return not (self.gnss.enabled or self.laser.enabled or self.physics != PhysicsConfig())
+
+
+def parse_profile(name: str, raw: Any) -> UncertaintyConfig:
+    """Build a profile from its YAML mapping; raises UncertaintyError naming the bad entry."""
+    w = f"uncertainty.{name}"
+    raw = raw or {}
+    if not isinstance(raw, dict):
+        raise UncertaintyError(f"{w}: must be a mapping")
+    unknown = set(raw) - {"gnss", "laser", "physics"}
+    if unknown:
+        raise UncertaintyError(f"{w}: unknown sections {sorted(unknown)} (known: gnss, laser, physics)")
+    g, las, ph = (raw.get(k) or {} for k in ("gnss", "laser", "physics"))
+    for k, v in (("gnss", g), ("laser", las), ("physics", ph)):
+        if not isinstance(v, dict):
+            raise UncertaintyError(f"{w}.{k}: must be a mapping")
+    gnss = GnssConfig(**{k: _num(g, k, f"{w}.gnss", getattr(GnssConfig, k)) for k in
+                         ("bias_xy_std", "bias_z_std", "tau", "white_xy_std", "white_z_std")})
+    if gnss.tau <= 0.0:
+        raise UncertaintyError(f"{w}.gnss.tau: must be > 0, got {gnss.tau}")
+    laser = LaserConfig(**{k: _num(las, k, f"{w}.laser", 0.0) for k in
+                           ("range_std_frac", "range_std_min", "nan_rate", "inf_rate")})
+    if laser.nan_rate + laser.inf_rate > 1.0:
+        raise UncertaintyError(f"{w}.laser: nan_rate + inf_rate must be <= 1")
+    ranges = {}
+    for k in ("fire_water_factor", "jet_spot_factor", "jet_drop_per_m2", "wall_base_temp",
+              "thermal_noise_std", "thermal_offset"):
+        ranges[k] = _range(ph, k, f"{w}.physics", (0, 0)) if k in ph else None
+    for k in ("wall_temp_limits", "sun_azimuth_deg", "sun_elevation_deg"):
+        if k in ph:
+            ranges[k] = _range(ph, k, f"{w}.physics", (0, 0))
+    ranges["wall_sun_gain"] = _num(ph, "wall_sun_gain", f"{w}.physics", 0.0)
+    unknown = set(ph) - set(ranges)
+    if unknown:
+        raise UncertaintyError(f"{w}.physics: unknown keys {sorted(unknown)}")
+    return UncertaintyConfig(name, gnss, laser, PhysicsConfig(**ranges))
+
+
+def profile(section: Any, name: str) -> UncertaintyConfig:
+    """The named profile of a world file's `uncertainty:` section; `ideal` needs no entry (all off)."""
+    section = section or {}
+    if not isinstance(section, dict):
+        raise UncertaintyError("uncertainty: must be a mapping of profile name -> models")
+    if name not in section:
+        if name == "ideal":
+            return UncertaintyConfig("ideal")
+        raise UncertaintyError(f"uncertainty profile '{name}' not in the world file (has: {sorted(section)})")
+    return parse_profile(name, section[name])
+
+
+class TrialUncertainty:
+    """The running uncertainty of one trial: per-robot GNSS errors, the seed's unknowns, the laser model."""
+
+    def __init__(self, cfg: UncertaintyConfig, seed: int, robot_ids: Sequence[int], n_fires: int,
+                 bmin: np.ndarray, bmax: np.ndarray, box_temp: np.ndarray, buildings: Sequence[str]):
+        self.cfg = cfg
+        self.rng = np.random.default_rng([int(seed), 17])     # never the simulation's own generator
+        self.unknowns = draw_unknowns(cfg.physics, self.rng, n_fires, list(robot_ids), bmin, bmax, box_temp,
+                                      buildings)
+        self.gnss = {rid: GnssError(cfg.gnss, self.rng) for rid in robot_ids} if cfg.gnss.enabled else {}
+
+    def step_gnss(self, dt: float) -> dict:
+        """Advance every robot's GNSS bias; returns robot id -> change of its bias (x, y, z)."""
+        return {rid: g.step(dt) for rid, g in self.gnss.items()}
+
+    def gnss_bias(self, rid: int) -> np.ndarray:
+        g = self.gnss.get(rid)
+        return g.bias.value if g is not None else np.zeros(3)
+
+    def gnss_fix(self, rid: int) -> np.ndarray:
+        g = self.gnss.get(rid)
+        return g.fix() if g is not None else np.zeros(3)
+
+    def scan(self, ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
+        if not self.cfg.laser.enabled:
+            return ranges
+        return corrupt_scan(ranges, self.cfg.laser, self.rng, range_min, range_max)
+
+
+__all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "LaserConfig",
+           "corrupt_scan", "PhysicsConfig", "Unknowns", "draw_unknowns", "sun_heated_normals",
+           "UncertaintyConfig", "parse_profile", "profile", "TrialUncertainty"]
