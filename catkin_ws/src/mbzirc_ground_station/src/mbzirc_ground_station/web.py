@@ -23,6 +23,7 @@ PAGE_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "static", "
 SSE_KEEPALIVE_S = 5.0
 FULL_FRAME_EVERY = 10     # tracks (the heavy part) go in every 10th frame and in a page's first frame
 SSE_RETRY_MS = 1000
+SOCKET_TIMEOUT_S = 20.0
 
 
 class _Server(ThreadingHTTPServer):
@@ -131,6 +132,7 @@ class GroundStationServer:
         class Handler(BaseHTTPRequestHandler):
             server_version = "mbzirc_ground_station/1"
             protocol_version = "HTTP/1.1"
+            timeout = SOCKET_TIMEOUT_S   # a page that stops reading is dropped, its thread freed
 
             def log_message(self, fmt: str, *args: object) -> None:  # quiet
                 pass
