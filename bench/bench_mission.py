@@ -7,7 +7,10 @@ time of the same run) and, next to it, the CPU the trial cost: CPU seconds per s
 per node kind (agents, ual_sim, detectors, central unit, estimator, others), sampled from /proc for the
 whole run (_node_cpu.py). Long: about 20/RTF minutes per seed (less when every fire is out early).
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
-The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`).
+    python bench/bench_mission.py --uncertainty realistic --seeds 20     (seeds 101-120, never tuned on)
+The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`). `--uncertainty realistic` runs the
+trial with the real one's uncertainty (ual_sim README, "Uncertainty"), starts at seed 101 unless
+--first-seed says otherwise, and writes bench/results/mission_realistic.json.
 """
 from __future__ import annotations
 
@@ -26,7 +29,8 @@ from _node_cpu import KINDS, NodeCpuSampler, per_sim_second
 def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     out = os.path.join(out_root, f"seed_{seed}")
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
-           f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1"]
+           f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1",
+           f"UNCERTAINTY={args.uncertainty}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sampler = NodeCpuSampler(proc.pid).start()
@@ -58,7 +62,7 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
     res = {
         "seeds": [r["seed"] for r in runs],
         "runs_completed": len(ok),
-        "uavs": args.uavs, "rtf_requested": args.rtf, "duration_s": args.duration,
+        "uavs": args.uavs, "rtf_requested": args.rtf, "duration_s": args.duration, "uncertainty": args.uncertainty,
         "all_fires_out_ratio": round(len(all_out) / len(runs), 3) if runs else None,
         "mean_time_all_out_s": round(statistics.mean(r["all_out_time_s"] for r in all_out), 1) if all_out else None,
         "mean_fires_extinguished": round(statistics.mean(r["fires_extinguished"] for r in ok), 2) if ok else None,
@@ -76,7 +80,7 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
                                             "load_average_end", "error")} for r in runs],
     }
     res["seeds_requested"] = args.seeds
-    write_result("mission", res, say=False)
+    write_result("mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}", res, say=False)
     return res
 
 
@@ -89,14 +93,17 @@ def format_cpu(per_kind: dict) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, default=int(os.environ.get("MISSION_BENCH_SEEDS", "10")))
-    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--first-seed", type=int, default=None, help="1 (ideal) or 101 (realistic)")
+    ap.add_argument("--uncertainty", choices=("ideal", "realistic"), default="ideal")
     ap.add_argument("--rtf", type=float, default=4.0)
     ap.add_argument("--uavs", type=int, default=3)
     ap.add_argument("--duration", type=float, default=1200.0)
-    ap.add_argument("--runs-dir", default="/tmp/mbzirc_bench_mission",
+    ap.add_argument("--runs-dir", default=None,
                     help="where each trial's folder (summary, report, logs) goes")
     args = ap.parse_args()
-    out_root = args.runs_dir
+    if args.first_seed is None:
+        args.first_seed = 1 if args.uncertainty == "ideal" else 101
+    out_root = args.runs_dir or f"/tmp/mbzirc_bench_mission_{args.uncertainty}"
     runs = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         s = run_seed(seed, args, out_root)
