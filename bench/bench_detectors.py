@@ -6,7 +6,8 @@ scenes (facade/ground fire, empty view, inactive holder, sun-heated wall; facade
 noise, glitching hot pixels, NaN/inf laser beams). A sequence is a true positive when the detector
 publishes a fire within 1 m of the true one, a false positive when it publishes anything else. Precision
 and recall are over sequences (what the agents see: a fire reported or not while hovering in front of
-a holder). Ablations show what the frame filter and the peak gate buy.
+a holder). Ablations show what the frame filter and the contrast test buy. The same with every sun-heated
+surface at 50-55 degC (desert walls in full sun; the trial's `realistic` uncertainty draws 35-55).
 
 Holes: random facade holders (hole + two decoys, 0.10-0.15 m radius, 0.5-0.6 m apart, angles up to
 40 deg) rendered as 640x480 RGB-D; correct = the chosen middle circle is within one hole radius of the
@@ -14,7 +15,8 @@ true hole centre. Frames/s: one core (OpenCV and BLAS single-threaded), the node
 (message payload -> arrays -> detection -> choice), frames per CPU second of this single-threaded process
 (process_time, so that other jobs sharing the machine do not distort it), best of repeated timing.
 
-Writes bench/results/detectors.json. Usage: bench_detectors.py [--quick]
+Writes bench/results/detectors.json. Usage: bench_detectors.py [--quick] [--fire-only]
+(--fire-only: the fire detector's figures alone, written to bench/results/detectors_fire.json)
 """
 import os
 import sys
@@ -41,6 +43,7 @@ import synthetic_rgbd as CS  # noqa: E402  (the detectors' test fixtures)
 import synthetic_thermal as FS  # noqa: E402
 
 QUICK = "--quick" in sys.argv
+FIRE_ONLY = "--fire-only" in sys.argv
 FIRE_BANDS = [(1.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, 6.0), (6.0, 8.0)]
 HOLE_BANDS = [(1.0, 1.5), (1.5, 2.5), (2.5, 4.0), (4.0, 6.0), (6.0, 8.0)]
 FIRE_TRIALS = 40 if QUICK else 160   # per band and mode; half of them hold a fire
@@ -56,14 +59,14 @@ def load_tuned() -> dict:
         return yaml.safe_load(f)
 
 
-def fire_band(direction: int, band, trials: int, seed: int, **cfg) -> dict:
+def fire_band(direction: int, band, trials: int, seed: int, sun_range=(40.0, 45.0), **cfg) -> dict:
     rng = np.random.default_rng(seed)
     mode = "FORWARD" if direction == FC.CAMERA_DIRECTION_FORWARD else "DOWNWARD"
     tp = fp = fn = 0
     errors = []
     for i in range(trials):
         kind = "fire" if i % 2 == 0 else FS.SCENE_KINDS[1 + (i // 2) % 3]
-        scene = FS.random_scene(rng, direction, rng.uniform(*band), kind)
+        scene = FS.random_scene(rng, direction, rng.uniform(*band), kind, sun_range=sun_range)
         det = FireDetector(DetectorConfig(camera_config=mode, **cfg))
         hits = []
         for s, frame in FS.sequence(scene, rng, SEQ_FRAMES):
@@ -97,14 +100,20 @@ def fire_benchmark() -> dict:
         tp, fp, fn = (sum(b[x] for b in up_to_4) for x in ("tp", "fp", "fn"))
         bands["1-4m"] = {"tp": tp, "fp": fp, "fn": fn, "precision": tp / max(1, tp + fp), "recall": tp / max(1, tp + fn)}
         out[name] = bands
-    # ablations, FORWARD 1-4 m: what the frame filter and the peak gate are for
+    # ablations, FORWARD 1-4 m: what the frame filter and the contrast test are for
     abl = {}
     for label, cfg in (("as_shipped", {}), ("no_frame_filter", {"num_frame_filter": 0}),
-                       ("threshold_37_only_original", {"min_fire_temperature": 0.0}),
+                       ("threshold_37_only_original", {"min_contrast": 0.0, "band_max_fill": 0.0}),
                        ("no_false_negative_tolerance", {"false_negative_tolerance": 0})):
         r = fire_band(FC.CAMERA_DIRECTION_FORWARD, (1.0, 4.0), FIRE_TRIALS, 999, **cfg)
         abl[label] = {k: r[k] for k in ("precision", "recall", "tp", "fp", "fn")}
     out["ablation_forward_1-4m"] = abl
+    # desert walls: every sun-heated surface at 50-55 degC, 1-4 m, both cameras
+    hot = {}
+    for direction, name in ((FC.CAMERA_DIRECTION_FORWARD, "FORWARD"), (FC.CAMERA_DIRECTION_DOWNWARD, "DOWNWARD")):
+        r = fire_band(direction, (1.0, 4.0), 2 * FIRE_TRIALS, 777 + direction, sun_range=(50.0, 55.0))
+        hot[name] = {k: r[k] for k in ("precision", "recall", "tp", "fp", "fn", "median_position_error_m")}
+    out["walls_50_55C_1-4m"] = hot
     return out
 
 
@@ -189,6 +198,11 @@ def main() -> None:
     res["fire"] = fire_benchmark()
     res["fire_detector_fps_one_core"] = fire_fps()
     print(f"fire done ({time.time() - t_start:.0f} s)", flush=True)
+    if FIRE_ONLY:
+        res["seconds"] = time.time() - t_start
+        write_result("detectors_fire", res, indent=1)
+        print_fire(res)
+        return
     res["holes_tuned"] = hole_benchmark(tuned, HOLE_TRIALS)
     print("holes (tuned) done", flush=True)
     res["holes_tuned_without_rectify"] = hole_benchmark(no_rectify, max(10, HOLE_TRIALS // 2))
@@ -201,11 +215,36 @@ def main() -> None:
     res["targets"] = {
         "fire_precision_1-4m>=0.99": all(res["fire"][m]["1-4m"]["precision"] >= 0.99 for m in ("FORWARD", "DOWNWARD")),
         "fire_recall_1-4m>=0.95": all(res["fire"][m]["1-4m"]["recall"] >= 0.95 for m in ("FORWARD", "DOWNWARD")),
+        **fire_hot_wall_targets(res),
         "correct_hole_1.5-4m>=0.98": res["correct_hole_rate_1.5-4m"] >= 0.98,
         "circle_fps>=30": res["circle_detector_fps_one_core_640x480"] >= 30.0,
     }
     res["seconds"] = time.time() - t_start
     write_result("detectors", res, indent=1)
+    print_fire(res)
+    for label in ("holes_tuned", "holes_tuned_without_rectify", "holes_tuned_full_resolution"):
+        print(f"fire {mode}:")
+        for band, r in res["fire"][mode].items():
+            e = r.get("median_position_error_m")
+            print(f"  {band:>7}: precision {r['precision']:.3f} recall {r['recall']:.3f} "
+                  f"(tp {r['tp']} fp {r['fp']} fn {r['fn']})" + (f" median error {e:.2f} m" if e is not None else ""))
+        print(f"{label}:")
+        for band, r in res[label].items():
+            print(f"  {band:>8}: correct {r['correct_rate']:.3f} wrong {r['wrong_hole_rate']:.3f} none {r['no_choice_rate']:.3f}")
+    print(f"correct hole 1.5-4 m: {res['correct_hole_rate_1.5-4m']:.3f}")
+    print(f"circle_detector, 640x480, one core: {res['circle_detector_fps_one_core_640x480']:.1f} frames/s (tuned), "
+          f"{res['circle_detector_fps_without_rectify']:.1f} without rectification, "
+          f"{res['circle_detector_fps_full_resolution']:.1f} at full resolution")
+    print("targets:", res["targets"], f"({res['seconds']:.0f} s)")
+
+
+def fire_hot_wall_targets(res: dict) -> dict:
+    hot = res["fire"]["walls_50_55C_1-4m"]
+    return {"fire_walls_50_55C_precision>=0.99": all(hot[m]["precision"] >= 0.99 for m in hot),
+            "fire_walls_50_55C_recall>=0.95": all(hot[m]["recall"] >= 0.95 for m in hot)}
+
+
+def print_fire(res: dict) -> None:
     for mode in ("FORWARD", "DOWNWARD"):
         print(f"fire {mode}:")
         for band, r in res["fire"][mode].items():
@@ -215,16 +254,12 @@ def main() -> None:
     print("fire ablations (FORWARD 1-4 m):")
     for label, r in res["fire"]["ablation_forward_1-4m"].items():
         print(f"  {label:>28}: precision {r['precision']:.3f} recall {r['recall']:.3f}")
+    print("fire, sun-heated surfaces at 50-55 degC, 1-4 m:")
+    for mode, r in res["fire"]["walls_50_55C_1-4m"].items():
+        print(f"  {mode:>8}: precision {r['precision']:.3f} recall {r['recall']:.3f} (tp {r['tp']} fp {r['fp']} fn {r['fn']})")
     print(f"fire_detector: {res['fire_detector_fps_one_core']:.0f} frames/s on one core")
-    for label in ("holes_tuned", "holes_tuned_without_rectify", "holes_tuned_full_resolution"):
-        print(f"{label}:")
-        for band, r in res[label].items():
-            print(f"  {band:>8}: correct {r['correct_rate']:.3f} wrong {r['wrong_hole_rate']:.3f} none {r['no_choice_rate']:.3f}")
-    print(f"correct hole 1.5-4 m: {res['correct_hole_rate_1.5-4m']:.3f}")
-    print(f"circle_detector, 640x480, one core: {res['circle_detector_fps_one_core_640x480']:.1f} frames/s (tuned), "
-          f"{res['circle_detector_fps_without_rectify']:.1f} without rectification, "
-          f"{res['circle_detector_fps_full_resolution']:.1f} at full resolution")
-    print("targets:", res["targets"], f"({res['seconds']:.0f} s)")
+    if FIRE_ONLY:
+        print("targets:", fire_hot_wall_targets(res))
 
 
 if __name__ == "__main__":

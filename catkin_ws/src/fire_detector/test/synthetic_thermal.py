@@ -175,13 +175,14 @@ def render_scan(scene: ThermalScene, rng: np.random.Generator, noise_std: float 
 
 
 def random_scene(rng: np.random.Generator, direction: int, distance: float, kind: str,
-                 max_angle_deg: float = 40.0) -> ThermalScene:
+                 max_angle_deg: float = 40.0, sun_range: Tuple[float, float] = (40.0, 45.0)) -> ThermalScene:
     """A random viewpoint at `distance` metres of one of SCENE_KINDS.
 
     fire: an active holder (FORWARD, partly cooled by water: 30-100 % of its heat) on a sun-heated or
     interior wall, or a ground plate (DOWNWARD); empty: a cool surface; inactive_holder: a cold holder on
     a sun-heated wall (FORWARD) or a plate under a blanket (DOWNWARD); hot_wall: a sun-heated facade or
-    roof with nothing on it. Sources are placed within 12 degrees of the camera axis.
+    roof with nothing on it. Sources are placed within 12 degrees of the camera axis. `sun_range`: the
+    temperature of sun-heated surfaces (desert walls in full sun: 50-55 degC).
     """
     if kind not in SCENE_KINDS:
         raise ValueError(f"unknown scene kind {kind!r}")
@@ -189,7 +190,7 @@ def random_scene(rng: np.random.Generator, direction: int, distance: float, kind
     angle = math.radians(rng.uniform(-max_angle_deg, max_angle_deg) if forward else rng.uniform(-5.0, 5.0))
     bearing = math.radians(12.0)
     off = (rng.uniform(-1, 1) * distance * math.tan(bearing), rng.uniform(-1, 1) * distance * math.tan(bearing))
-    sun = rng.uniform(40.0, 45.0)
+    sun = rng.uniform(*sun_range)
     surface = (sun if rng.random() < 0.7 else 31.0) if forward else 34.0
     radius, hot, inner_r, inner_t = 0.0, 0.0, 0.0, 0.0
     if kind == "fire":

@@ -17,14 +17,20 @@ Vec3 = Tuple[float, float, float]
 
 @dataclass
 class DetectorConfig:
-    """Parameters of FireDetector (the node's `~` params, same names and defaults as the original)."""
+    """Parameters of FireDetector (the node's `~` params): the original's names, defaults and meaning first,
+    then what this port adds (README.md, "beyond the original"; their neutral values give the original)."""
 
     camera_config: str = C.DEFAULT_CAMERA_CONFIG
     thermal_threshold: float = C.DEFAULT_THERMAL_THRESHOLD
     angle_amplitude: float = C.DEFAULT_ANGLE_AMPLITUDE_DEG
     num_frame_filter: int = C.DEFAULT_NUM_FRAME_FILTER
+    # beyond the original
     false_negative_tolerance: int = C.DEFAULT_FALSE_NEGATIVE_TOLERANCE
-    min_fire_temperature: float = C.DEFAULT_MIN_FIRE_TEMPERATURE
+    min_contrast: float = C.DEFAULT_MIN_CONTRAST
+    saturation_temperature: float = C.DEFAULT_SATURATION_TEMPERATURE
+    band_max_fill: float = C.DEFAULT_BAND_MAX_FILL
+    hot_frame_max_range: float = C.HOT_FRAME_MAX_RANGE      # the original's fixed 5 m, as a parameter
+    check_fire_max_range: float = C.MAX_LASER_RANGE_FIRE    # the original's 7.5 m, as a parameter
 
     def __post_init__(self) -> None:
         if self.camera_config not in C.CAMERA_CONFIGS:
@@ -68,18 +74,26 @@ class FireDetector:
     Args:
         config: the detector parameters.
 
-    .. note:: a confirmed fire with no usable pose (or, FORWARD, no valid laser range under
-       MAX_LASER_RANGE_FIRE) keeps the filter confirmed (CheckFire says yes) but gives no position.
+    .. note:: a confirmed fire with no usable pose or (FORWARD) no valid front laser range keeps the filter
+       confirmed (CheckFire says yes) but gives no position; beyond the 7.5 m gate CheckFire says no.
     """
 
     def __init__(self, config: DetectorConfig) -> None:
         self.config = config
         self.filter = FrameFilter(config.num_frame_filter, config.false_negative_tolerance)
+        self.within_check_range = True
 
     @property
     def fire_detected(self) -> bool:
-        """The CheckFire answer: the frame filter currently believes in a fire."""
-        return self.filter.confirmed
+        """The CheckFire answer: the frame filter believes in a fire and (FORWARD) the wall ahead is within
+        the 7.5 m gate."""
+        return self.filter.confirmed and self.within_check_range
+
+    def _laser_gate(self, laser_range: Optional[float], limit: float) -> bool:
+        """FORWARD: the front range is under `limit` (or no valid beam ahead, as the original's 0 mean)."""
+        if self.config.camera_direction != C.CAMERA_DIRECTION_FORWARD:
+            return True
+        return laser_range is None or not math.isfinite(laser_range) or laser_range < limit
 
     def process(
         self,
@@ -89,12 +103,20 @@ class FireDetector:
         laser_range: Optional[float],
     ) -> FrameResult:
         """Processes one raw_temp_array frame; raises ValueError on malformed temperatures."""
+        cfg = self.config
         frame = parse_temperatures(temperatures)
-        spot = find_hot_spot(frame, self.config.thermal_threshold, self.config.min_fire_temperature)
-        confirmed_now = self.filter.update(spot is not None)
-        result = FrameResult(spot=spot, confirmed=self.filter.confirmed)
+        spot = find_hot_spot(frame, cfg.thermal_threshold, cfg.min_contrast, cfg.saturation_temperature,
+                             cfg.band_max_fill)
+        near = self._laser_gate(laser_range, cfg.hot_frame_max_range)
+        confirmed_now = self.filter.update(spot is not None and near)
+        self.within_check_range = self._laser_gate(laser_range, cfg.check_fire_max_range)
+        result = FrameResult(spot=spot, confirmed=self.fire_detected)
         if spot is None:
             result.reason = "no hot spot"
+            return result
+        if not near:
+            result.reason = (f"hot, but the front laser range {laser_range:.2f} m >= {cfg.hot_frame_max_range} m "
+                             "(hot frames count only closer)")
             return result
         if not confirmed_now:
             result.reason = f"filtering ({self.filter.hot_count}/{self.filter.num_frame_filter + 1} hot frames)"
@@ -106,8 +128,8 @@ class FireDetector:
             if laser_range is None or not math.isfinite(laser_range):
                 result.reason = "no valid front laser range"
                 return result
-            if laser_range >= C.MAX_LASER_RANGE_FIRE:
-                result.reason = f"front laser range {laser_range:.2f} m >= {C.MAX_LASER_RANGE_FIRE} m"
+            if laser_range >= cfg.check_fire_max_range:
+                result.reason = f"front laser range {laser_range:.2f} m >= {cfg.check_fire_max_range} m"
                 return result
             pos, rel = forward_fire_position(uav_position, uav_yaw, laser_range, spot.u, spot.v)
             depth = laser_range

@@ -52,8 +52,15 @@ class FireDetectorNode:
             angle_amplitude=float(rospy.get_param("~angle_amplitude", C.DEFAULT_ANGLE_AMPLITUDE_DEG)),
             num_frame_filter=int(rospy.get_param("~num_frame_filter", C.DEFAULT_NUM_FRAME_FILTER)),
             false_negative_tolerance=int(rospy.get_param("~false_negative_tolerance", C.DEFAULT_FALSE_NEGATIVE_TOLERANCE)),
-            min_fire_temperature=float(rospy.get_param("~min_fire_temperature", C.DEFAULT_MIN_FIRE_TEMPERATURE)),
+            min_contrast=float(rospy.get_param("~min_contrast", C.DEFAULT_MIN_CONTRAST)),
+            saturation_temperature=float(rospy.get_param("~saturation_temperature", C.DEFAULT_SATURATION_TEMPERATURE)),
+            band_max_fill=float(rospy.get_param("~band_max_fill", C.DEFAULT_BAND_MAX_FILL)),
+            hot_frame_max_range=float(rospy.get_param("~hot_frame_max_range", C.HOT_FRAME_MAX_RANGE)),
+            check_fire_max_range=float(rospy.get_param("~check_fire_max_range", C.MAX_LASER_RANGE_FIRE)),
         )
+        if rospy.has_param("~min_fire_temperature"):
+            rospy.logwarn("fire_detector: ~min_fire_temperature is gone (a fixed floor cannot tell a fire from a "
+                          "sun-heated wall); ignored, see ~min_contrast and ~saturation_temperature")
         self.detector = FireDetector(config)
         self.lock = threading.Lock()
         self.pose: Optional[Tuple[Tuple[float, float, float], float]] = None
@@ -153,14 +160,17 @@ class FireDetectorNode:
         det.pose.pose.position.x, det.pose.pose.position.y, det.pose.pose.position.z = fire.position
         det.pose.pose.orientation.w = 1.0
         cov = [0.0] * 36
-        cov[0], cov[7], cov[14] = self.covariance
+        cov[0], cov[7], cov[14] = (s * s for s in self.covariance)   # the original: covariance_x is a std (m)
         det.pose.covariance = cov
         det.relative_position.x, det.relative_position.y, det.relative_position.z = fire.relative_position
         det.relative_yaw = float(np.arctan2(fire.relative_position[1], fire.relative_position[0])) \
             if cfg.camera_direction == C.CAMERA_DIRECTION_FORWARD else 0.0
         size_m = max(spot.width, spot.height) * fire.depth / C.FOCAL_PX
         det.scale.x = det.scale.y = det.scale.z = size_m
+        # u, v, width, height as the original sets them: offsets of the centroid from the image centre
+        # (u towards the image left, v towards its bottom, pixels) and its fixed spot size
         det.image_detection = ThermalImage(camera_direction=cfg.camera_direction, img_height=C.IMG_HEIGHT,
-                                           img_width=C.IMG_WIDTH, u=spot.u, v=spot.v, height=spot.height,
-                                           width=spot.width, depth=fire.depth)
+                                           img_width=C.IMG_WIDTH, u=C.CENTER_U - spot.u, v=spot.v - C.CENTER_V,
+                                           height=C.ORIGINAL_SPOT_SIZE_PX, width=C.ORIGINAL_SPOT_SIZE_PX,
+                                           depth=fire.depth)
         return ObjectDetectionList(agent_id=self.uav_id, stamp=stamp, objects=[det])

@@ -51,9 +51,61 @@ def test_no_fire_scenes(name):
 
 
 def test_hot_wall_fools_the_original_threshold_alone():
-    """Without the peak gate (original behaviour) the sun-heated wall is a persistent false positive."""
-    det, fires = run("hot_wall", n=40, min_fire_temperature=0.0)
+    """Without the contrast test (original behaviour) the sun-heated wall is a persistent false positive."""
+    det, fires = run("hot_wall", n=40, min_contrast=0.0, band_max_fill=0.0)
     assert fires
+
+
+@pytest.mark.parametrize("wall", [50.0, 55.0])
+def test_desert_hot_wall_is_no_fire_and_a_fire_on_it_is(wall):
+    """Walls at 50-55 degC in the sun (what the old 50 degC floor could not survive): no fire on the bare
+    wall, the fire on it found and placed."""
+    from dataclasses import replace
+    _, fires = _run_scene(replace(S.NAMED_SCENES["hot_wall"], surface_temp=wall), n=40)
+    assert not fires
+    det, fires = _run_scene(replace(S.NAMED_SCENES["facade_fire"], surface_temp=wall, distance=4.0))
+    assert det.fire_detected and fires
+    errors = [np.linalg.norm(np.subtract(fire.position, s.source_arena())) for fire, s in fires]
+    assert np.median(errors) < 0.4
+
+
+def _run_scene(scene, n=25, seed=1, **cfg):
+    det = FireDetector(DetectorConfig(camera_config="FORWARD", **cfg))
+    rng = np.random.default_rng(seed)
+    fires = []
+    for s, frame in S.sequence(scene, rng, n):
+        ranges, amin, inc = S.render_scan(s, rng)
+        lr = front_laser_range(ranges, amin, inc, S.LASER_RANGE_MIN, S.LASER_RANGE_MAX, 5.0)
+        r = det.process(frame.ravel(), s.uav_xyz, s.uav_yaw, lr)
+        if r.fire:
+            fires.append((r.fire, s))
+    return det, fires
+
+
+def test_hot_frames_count_only_within_5_m_and_checkfire_within_7_5_m():
+    """The original's gates: a hot frame with the wall 5 m or more ahead does not count; a confirmed fire
+    with the wall 7.5 m or more ahead is not answered; no valid beam ahead passes (the original's 0 mean)."""
+    frame = np.full(1024, 30.0)
+    frame[500] = 150.0
+    det = FireDetector(DetectorConfig(num_frame_filter=2, false_negative_tolerance=0))
+    for _ in range(10):
+        r = det.process(frame, (0, 0, 5), 0.0, 5.5)
+    assert not det.fire_detected and "hot frames count only closer" in r.reason
+    for _ in range(3):
+        det.process(frame, (0, 0, 5), 0.0, 4.0)
+    assert det.fire_detected
+    det2 = FireDetector(DetectorConfig(num_frame_filter=2, false_negative_tolerance=0))
+    for _ in range(3):
+        det2.process(frame, (0, 0, 5), 0.0, None)
+    assert det2.fire_detected
+    down = FireDetector(DetectorConfig(camera_config="DOWNWARD", num_frame_filter=2))
+    for _ in range(3):
+        down.process(frame, (0, 0, 4), 0.0, 20.0)
+    assert down.fire_detected                        # the gates are the FORWARD camera's
+    far = FireDetector(DetectorConfig(num_frame_filter=2, hot_frame_max_range=9.0))
+    for _ in range(3):
+        far.process(frame, (0, 0, 5), 0.0, 8.0)
+    assert far.filter.confirmed and not far.fire_detected   # counted (UGV setting), but beyond 7.5 m
 
 
 def test_no_laser_or_far_laser_gives_no_position_but_checkfire_says_yes():
@@ -63,10 +115,10 @@ def test_no_laser_or_far_laser_gives_no_position_but_checkfire_says_yes():
     r = det.process(frame, (0, 0, 5), 0.0, None)
     assert r.confirmed and r.fire is None and "laser" in r.reason
     r = det.process(frame, (0, 0, 5), 0.0, 8.0)
-    assert r.fire is None and det.fire_detected
-    r = det.process(frame, (0, 0, 5), 0.0, 7.0)
-    assert r.fire is not None and r.fire.depth == 7.0
-    r = det.process(frame, None, None, 7.0)
+    assert r.fire is None and not det.fire_detected          # beyond the 7.5 m gate: CheckFire says no
+    r = det.process(frame, (0, 0, 5), 0.0, 4.5)
+    assert r.fire is not None and r.fire.depth == 4.5
+    r = det.process(frame, None, None, 4.5)
     assert r.fire is None and "pose" in r.reason
 
 
