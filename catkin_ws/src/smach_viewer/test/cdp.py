@@ -82,7 +82,8 @@ class HeadlessChromium:
         return resp.get("result", {})
 
     def open(self, url):
-        target = self.send("Target.createTarget", {"url": "about:blank"})["targetId"]
+        # generous: on a loaded machine Chromium can take tens of seconds to come up
+        target = self.send("Target.createTarget", {"url": "about:blank"}, timeout=90.0)["targetId"]
         self.session = self.send("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
         self.send("Network.enable", session=self.session)
         self.send("Page.enable", session=self.session)
