@@ -66,12 +66,5 @@ HOLE_SAME_MAX = 0.35            # m: a circle this close to the locked hole is t
 COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out; the
 #                                 water keeps flowing meanwhile: a nearly quenched heater reads cold while its
 #                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)
-FIRE_LITRES = 1.0               # L into a facade / indoor fire's container to put it out (c3_world.md): a run
-#                                 whose tank ran dry calls a cold fire out only after delivering this much
-INDOOR_HIT_SHARE = 0.6          # share of the jet credited as in while aiming at an indoor fire's estimate (no
-#                                 hole detector there): seen ~0.75 in missions; a dry-tank run then calls a cold
-#                                 fire out only after >= 1.67 L pumped (seen: 1.2 L left a fire at 92 %)
-HOLE_RADIUS = 0.15              # m: a facade fire's hole (the container's mouth)
-JET_SPOT_RADIUS = 0.11          # m: radius of the water spot at the shooting distance (nozzle calibration)
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)

@@ -61,19 +61,6 @@ class HoleCentering:
         e = self.error(hole_body)
         return abs(e[1]) <= self.tolerance and abs(e[2]) <= self.tolerance and abs(e[0]) <= self.depth_tolerance
 
-    def hit_share(self, hole_body: Sequence[float], hole_radius: float, spot_radius: float) -> float:
-        """A conservative guess (0-1) of the share of the jet entering the hole at this aim error.
-
-        Why: "centred" allows ~0.15 m per axis, where half the water spot may splash on the wall (seen: a
-        tank of 2 L left a fire at 97.7 %). Full credit only while the whole spot is inside the hole; it
-        falls linearly to nothing when the spot centre reaches the rim (the true share there is ~0.45).
-        """
-        e = self.error(hole_body)
-        radial = math.hypot(float(e[1]), float(e[2]))
-        if not math.isfinite(radial) or spot_radius <= 0.0:
-            return 0.0
-        return min(1.0, max(0.0, (hole_radius - radial) / spot_radius))
-
     def velocity(self, hole_body: Sequence[float], yaw: float, front_range: float = math.inf,
                  min_wall: float = 0.0) -> np.ndarray:
         """World-frame velocity command that reduces the error.

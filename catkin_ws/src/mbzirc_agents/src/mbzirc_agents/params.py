@@ -77,10 +77,6 @@ class AgentParams:
     entry_depth: float = _param(2.5, 'm flown straight in through a window')
     indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
-    fire_litres: float = _param(C.FIRE_LITRES, "L a facade / indoor fire's container takes "
-                                "(see tasks/cold_check.py)")
-    indoor_hit_share: float = _param(C.INDOOR_HIT_SHARE, 'share of the water believed to enter an indoor '
-                                     'fire (no hole to aim at)')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
     home: List[float] = _param([], 'x, y, z of home; empty: the first pose received', lengths=(0, 3))
     door_outside: List[float] = _param(list(C.UGV_DOOR_OUTSIDE), 'UGV: x, y in front of the door',

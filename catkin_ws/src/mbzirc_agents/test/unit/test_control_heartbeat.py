@@ -35,15 +35,6 @@ def test_hole_not_centred_when_off():
     assert c.HoleCentering().centred((1.5, 0.05, -0.05))
 
 
-def test_hit_share_is_full_only_with_the_whole_spot_in_the_hole():
-    ctl = c.HoleCentering(shoot_distance=1.5)
-    assert ctl.hit_share((1.5, 0.0, 0.0), 0.15, 0.11) == 1.0
-    assert ctl.hit_share((1.5, 0.03, 0.0), 0.15, 0.11) == 1.0       # spot still inside the rim
-    assert 0.0 < ctl.hit_share((1.5, 0.06, 0.06), 0.15, 0.11) < 1.0  # "centred", yet part splashes
-    assert ctl.hit_share((1.5, 0.0, 0.15), 0.15, 0.11) == 0.0       # spot centre on the rim: no credit
-    assert ctl.hit_share((1.5, float('nan'), 0.0), 0.15, 0.11) == 0.0
-
-
 def test_ground_centering_never_descends_off_target():
     ctl = c.GroundFireCentering(release_height=1.5)
     v = ctl.velocity((0, 0, 4), (5, 0))

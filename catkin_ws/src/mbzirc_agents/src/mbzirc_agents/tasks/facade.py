@@ -19,7 +19,7 @@ from .. import constants as C
 from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall
-from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
+from .cold_check import ColdConfirmation, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import CAM_OFFSET_X, SensedObjects
 
@@ -290,7 +290,6 @@ class ExtinguishFacadeFire(AgentTask):
         pumping_since = None
         last_centred = -1e9
         cold, cold_lock = ColdConfirmation(), self.lock_count
-        meter = WaterMeter()
         unseen_cold = 0                                 # cold answers on a lock never seen hot
         last_check = -1e9
         while True:
@@ -319,15 +318,12 @@ class ExtinguishFacadeFire(AgentTask):
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
-            meter.update(a.water_level, pumping_since is not None,
-                         ctl.hit_share(target, C.HOLE_RADIUS, C.JET_SPOT_RADIUS) if on_hole else 0.0)
             if a.water_empty():
                 a.stop_pump()
                 a.hold()                                # no velocity loop while we wait for the answers
                 if not on_hole:
                     return False
-                out, self.dry_note = dry_tank_verdict(cold, meter, a.p.fire_litres, a.fire_detected,
-                                                      self.sleep)
+                out, self.dry_note = dry_tank_verdict(cold)
                 a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {self.dry_note}')
                 return out
             if (on_hole and pumping_since is not None and last_centred == now

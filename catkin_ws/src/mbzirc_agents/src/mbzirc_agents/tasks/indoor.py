@@ -12,7 +12,7 @@ import numpy as np
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
-from .cold_check import ColdConfirmation, WaterMeter, dry_tank_verdict
+from .cold_check import ColdConfirmation, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
@@ -143,25 +143,22 @@ class ExtinguishIndoorFire(AgentTask):
             if not self._well_localised(ud.fire_id):
                 raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
             return self._top_up(ud.fire_id)
-        meter = WaterMeter()
         try:
             a.start_pump()
             start = a.backend.now()
-            meter.update(a.water_level, False)
             while not a.water_empty():
                 self.check_preempt()
                 if a.backend.now() - start > a.p.extinguish_timeout:
                     raise TaskError('timeout while pumping')
                 self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
                 self.sleep(0.5)
-                meter.update(a.water_level, True, a.p.indoor_hit_share)
                 if cold.update(a.fire_detected()):
                     break
         finally:
             a.stop_pump()
         out, why = cold.out, 'extinguished'
         if not out:                                     # tank empty: did the last water do it?
-            out, why = dry_tank_verdict(cold, meter, a.p.fire_litres, a.fire_detected, self.sleep)
+            out, why = dry_tank_verdict(cold)
             why = 'extinguished' if out else why
             a.backend.loginfo(f'[{self.name}] fire {ud.fire_id}: tank dry, {why}')
         if out:
