@@ -19,6 +19,8 @@ from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs import msg as cmsg
 from mbzirc_arena.messages import feed_position
 from mbzirc_comm_objs.srv import FreeRegions
+from mbzirc_ros_utils.liveness import new_run_id
+from mbzirc_ros_utils.periodic import PeriodicTimer
 from std_msgs.msg import Header, String
 
 from . import constants as C
@@ -117,9 +119,14 @@ class CentralUnit:
                                       callback_args=i, queue_size=1) for i in self.agent_ids]
         self.subs.append(rospy.Subscriber("/estimated_objects", cmsg.ObjectList, self._on_objects, queue_size=1))
         self.seq = 0
-        self.hb_timer = rospy.Timer(rospy.Duration(1.0 / float(rospy.get_param("~heartbeat_rate", 2.0))),
-                                    self._heartbeat)
-        self.tick_timer = rospy.Timer(rospy.Duration(1.0 / float(rospy.get_param("~rate", 2.0))), self._tick)
+        # the heartbeat names this run (mission = the master's /run_id, a new instance per start) and is sent
+        # by the tick itself, after each completed step: it proves that decisions are being made, not only
+        # that the process runs (a timer beside the tick kept beating while the tick was blocked)
+        self.run_id = new_run_id("central_unit", str(rospy.get_param("/run_id", "") or ""))
+        self.hb_period = 1.0 / float(rospy.get_param("~heartbeat_rate", 2.0))   # at most this often
+        self._last_hb = -1e9
+        # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
+        self.tick_timer = PeriodicTimer(1.0 / float(rospy.get_param("~rate", 2.0)), self._tick, "central unit tick")
         rospy.on_shutdown(self._shutdown)
         rospy.loginfo("central_unit: agents %s, layout with %d facade holders, %d rooms",
                       self.agent_ids, len(params.layout.facade_holders),
@@ -184,9 +191,13 @@ class CentralUnit:
             self.fires = fires
 
     # ---- outputs ---------------------------------------------------------------------------------
-    def _heartbeat(self, _event: Any) -> None:
+    def _heartbeat(self) -> None:
+        now = rospy.get_time()
+        if self._last_hb <= now < self._last_hb + self.hb_period - 1e-3:
+            return                 # ticks faster than ~heartbeat_rate: not every tick
+        self._last_hb = now
         self.seq += 1
-        h = Header(seq=self.seq, stamp=rospy.Time.now(), frame_id="central_unit")
+        h = Header(seq=self.seq, stamp=rospy.Time.now(), frame_id=self.run_id)
         self.heartbeat_pub.publish(h)
 
     def _client(self, agent_id: str, task: str) -> actionlib.SimpleActionClient:
@@ -231,6 +242,8 @@ class CentralUnit:
             self._step()
         except Exception as e:  # noqa: BLE001 - the mission must go on; say what broke
             rospy.logerr_throttle(5.0, f"central_unit: tick failed: {type(e).__name__}: {e}")
+            return                 # no heartbeat for a step that did not complete
+        self._heartbeat()
 
     def _step(self) -> None:
         now = rospy.get_time()
@@ -291,8 +304,7 @@ class CentralUnit:
                                                    "indoor_owner": self.strategy.indoor_owner})))
 
     def _shutdown(self) -> None:
-        for t in (self.tick_timer, self.hb_timer):
-            t.shutdown()
+        self.tick_timer.shutdown()
         for cmd in list(self.strategy.in_flight.values()):
             try:
                 self._client(cmd.agent_id, cmd.task).cancel_goal()
