@@ -5,14 +5,11 @@ must not be scattered through the code.
 """
 import math
 
-# --- UAL states (uav_abstraction_layer/State constants, duplicated to keep the core free of ROS) ---
-UNINITIALIZED = 0
-LANDED_DISARMED = 1
-LANDED_ARMED = 2
-TAKING_OFF = 3
-FLYING_AUTO = 4
-FLYING_MANUAL = 5
-LANDING = 6
+# --- UAL states (uav_abstraction_layer/State, named once in mbzirc_arena: the core stays free of ROS) ---
+from mbzirc_arena.messages import (UAL_FLYING_AUTO as FLYING_AUTO, UAL_FLYING_MANUAL as FLYING_MANUAL,  # noqa: E402
+                                   UAL_LANDED_ARMED as LANDED_ARMED, UAL_LANDED_DISARMED as LANDED_DISARMED,
+                                   UAL_LANDING as LANDING, UAL_TAKING_OFF as TAKING_OFF,
+                                   UAL_UNINITIALIZED as UNINITIALIZED)
 FLYING_STATES = (TAKING_OFF, FLYING_AUTO, FLYING_MANUAL, LANDING)
 
 # --- kinematics (defaults of the original UAL light simulation) ---

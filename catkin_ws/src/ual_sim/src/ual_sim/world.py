@@ -13,6 +13,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 import yaml
+from mbzirc_arena.arena import floor_of
 
 from . import constants as C
 
@@ -76,12 +77,8 @@ class World:
                     and np.all(p <= self.arena_max - margin))
 
     def floor_of(self, z: float) -> int:
-        """Index of the tower level whose floor is the highest at or below z (+0.5 m of slack)."""
-        level = 0
-        for i, fz in enumerate(self.floors):
-            if z >= fz - 0.5:
-                level = i
-        return level
+        """Index of the tower level of height z (the arena's rule, mbzirc_arena `floor_of`)."""
+        return floor_of(z, self.floors)
 
     def support_height(self, x: float, y: float, z: float) -> float:
         """Height of the surface a robot at (x, y, z) would land on: the highest box top at or below z."""
@@ -325,11 +322,7 @@ def _holders(raw: Any, kind: str, floors: list) -> list[Holder]:
         n = _vec(h, "normal", 3, w, default=[0.0, 0.0, 1.0])
         if np.linalg.norm(n) < 1e-9:
             raise WorldError(f"{w}: normal must not be zero")
-        level = 0
-        for k, fz in enumerate(floors):
-            if pos[2] >= fz - 0.5:
-                level = k
-        floor = int(h.get("floor", level if kind != "ground" else 0))
+        floor = int(h.get("floor", floor_of(pos[2], floors) if kind != "ground" else 0))
         out.append(Holder(str(h.get("id", f"{kind}_{i}")), kind, pos, n / np.linalg.norm(n), floor))
     return out
 
