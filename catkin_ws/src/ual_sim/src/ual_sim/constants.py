@@ -6,6 +6,7 @@ must not be scattered through the code.
 import math
 
 # --- UAL states (uav_abstraction_layer/State, named once in mbzirc_arena: the core stays free of ROS) ---
+from mbzirc_arena import messages as _M  # noqa: E402
 from mbzirc_arena.messages import (UAL_FLYING_AUTO as FLYING_AUTO, UAL_FLYING_MANUAL as FLYING_MANUAL,  # noqa: E402
                                    UAL_LANDED_ARMED as LANDED_ARMED, UAL_LANDED_DISARMED as LANDED_DISARMED,
                                    UAL_LANDING as LANDING, UAL_TAKING_OFF as TAKING_OFF,
@@ -112,10 +113,6 @@ HOLD_GAIN = 2.0            # 1/s: position-hold pull back to the set-point
 # --- payload names ---
 PAYLOAD_WATER = "water"
 PAYLOAD_BLANKET = "blanket"
-UGV_ID = 0
-FRAME_ARENA = "arena"
-
-
-def robot_ns(robot_id: int) -> str:
-    """Namespace of a robot: the original team's naming, `mbzirc2020_<id>`."""
-    return f"mbzirc2020_{robot_id}"
+UGV_ID = int(_M.UGV_ID)
+FRAME_ARENA = _M.GLOBAL_FRAME
+robot_ns = _M.robot_ns   # `mbzirc2020_<id>`, the original team's naming

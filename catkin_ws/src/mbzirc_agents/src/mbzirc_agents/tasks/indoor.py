@@ -90,8 +90,7 @@ class SearchIndoor(AgentTask):
         raise TaskError('no path given')
 
     def _fires(self, floor: int) -> list:
-        return [int(o.id) for o in self.agent.fires((C.SUBTYPE_INDOOR,))
-                if floor_of(o.pose.pose.position.z) == floor or floor == 0 and o.pose.pose.position.z < 5.0]
+        return [int(o.id) for o in self.agent.fires((C.SUBTYPE_INDOOR,)) if floor_of(o.pose.pose.position.z) == floor]
 
     def _look(self, floor: int, i: int, n: int, yaw) -> list:
         a = self.agent
