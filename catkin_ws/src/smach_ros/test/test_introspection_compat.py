@@ -184,6 +184,7 @@ class TestIntrospectionCompat(unittest.TestCase):
             # the debugger is off by default: a latched status says so, nobody listens to commands
             status = json.loads(rospy.wait_for_message("compat_d/smach/debug/status", String, 5).data)
             self.assertEqual(status["allowed"], False)
+            self.assertEqual(status["init_allowed"], False)  # tells viewers not to offer "set initial state"
             self.assertNotIn("execute", root["A"].__dict__)  # nothing wrapped
             master = rosgraph.Master(rospy.get_name())
             subscribed = [t for t, _ in master.getSystemState()[1]]

@@ -242,6 +242,13 @@ class TestWebViewer(unittest.TestCase):
             urllib.request.urlopen(req, timeout=5)
         self.assertEqual(ex.exception.code, 400)
         self.assertIn("not allowed", json.loads(ex.exception.read())["error"])
+        # nor does it accept container_init: "Set as initial state" says so instead of sending into the void
+        req = urllib.request.Request(self.base + "/api/set_initial_state", method="POST",
+                                     headers={"Content-Type": "application/json"},
+                                     data=json.dumps({"server": LOCKED, "path": "/ROOT", "state": "REPORT"}).encode())
+        with self.assertRaises(urllib.error.HTTPError) as ex:
+            urllib.request.urlopen(req, timeout=5)
+        self.assertIn("does not accept container_init", json.loads(ex.exception.read())["error"])
 
 
 if __name__ == "__main__":

@@ -17,8 +17,9 @@ Wire protocol (std_msgs/String holding JSON, next to the standard topics, which 
   ``break`` (``path``, ``on``: set/clear a breakpoint on a state path), ``pause`` (stop at the next state
   entered), ``continue`` (``path`` optional: release that paused state, or all, and stop pausing),
   ``step`` (``path``: release it and stop at the next state entered), ``force`` (``path``, ``outcome``).
-* ``<server>/smach/debug/status`` (latched, on every change): ``{"allowed", "breakpoints", "pausing",
-  "paused": [{"path", "outcomes", "since", "userdata", "userdata_notes"}], "states", "last", "caps"}``.
+* ``<server>/smach/debug/status`` (latched, on every change): ``{"allowed", "init_allowed", "breakpoints",
+  "pausing", "paused": [{"path", "outcomes", "since", "userdata", "userdata_notes"}], "states", "last",
+  "caps"}``; with debugging off only ``{"allowed": false, "init_allowed", "reason"}``.
 
 The userdata of a paused state's container is sent as JSON, bounded: keys in ``exclude_keys`` are left
 out, a value whose JSON exceeds ``max_value_chars`` is replaced by a note, and at most ``max_total_chars``
@@ -95,8 +96,9 @@ class StateDebugger:
     def __init__(self, root: smach.State, root_path: str, publish: Callable[[str], None],
                  breakpoints: Iterable[str] = (), exclude_keys: Iterable[str] = (),
                  max_value_chars: int = MAX_VALUE_CHARS, max_total_chars: int = MAX_TOTAL_CHARS,
-                 is_shutdown: Callable[[], bool] = lambda: False) -> None:
+                 is_shutdown: Callable[[], bool] = lambda: False, extra_status: Optional[dict] = None) -> None:
         self._publish = publish
+        self._extra = dict(extra_status or {})  # facts about the server the viewer shows (init_allowed)
         self._exclude = tuple(exclude_keys)
         self._caps = {"value_chars": max_value_chars, "total_chars": max_total_chars}
         self._is_shutdown = is_shutdown
@@ -226,7 +228,7 @@ class StateDebugger:
     def status(self) -> dict:
         with self._cond:
             paused = list(self._paused.values())
-            out = {"allowed": True, "breakpoints": sorted(self._breakpoints), "pausing": self._pausing,
+            out = {**self._extra, "allowed": True, "breakpoints": sorted(self._breakpoints), "pausing": self._pausing,
                    "states": sorted(self._states), "last": dict(self._last), "caps": dict(self._caps),
                    "excluded_keys": list(self._exclude), "paused": []}
         for p in sorted(paused, key=lambda p: p.path):

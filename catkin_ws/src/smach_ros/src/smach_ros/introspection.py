@@ -226,7 +226,8 @@ class IntrospectionServer:
         self._debug_pub = rospy.Publisher(self._server_name + DEBUG_STATUS_TOPIC, String, queue_size=10, latch=True)
         if not self._allow_debug:
             self._debug_pub.publish(String(data=json.dumps(
-                {"allowed": False, "reason": "debugging is off on this server (~smach_allow_debug)"})))
+                {"allowed": False, "init_allowed": bool(self._allow_init),
+                 "reason": "debugging is off on this server (~smach_allow_debug)"})))
             return
         rospy.logwarn("IntrospectionServer %s offers the SMACH debugger (smach_allow_debug): anyone on the ROS "
                       "network can pause this machine and force outcomes." % self._server_name)
@@ -240,7 +241,8 @@ class IntrospectionServer:
                 pass
 
         debugger = self._debugger = StateDebugger(self._state, self._path, publish, breakpoints,
-                                                  self._exclude_keys or (), is_shutdown=rospy.is_shutdown)
+                                                  self._exclude_keys or (), is_shutdown=rospy.is_shutdown,
+                                                  extra_status={"init_allowed": bool(self._allow_init)})
         debugger.install()
         self._debug_sub = rospy.Subscriber(self._server_name + DEBUG_COMMAND_TOPIC, String,
                                            lambda msg: debugger.handle_command(msg.data), queue_size=20)

@@ -127,6 +127,8 @@ class IntrospectionWatcher:
             return "unknown container %r on %s" % (path, server)
         if container["has_structure"] and state not in container["children"]:
             return "%r is not a child of %s" % (state, path)
+        if (snap.get("debug") or {}).get("init_allowed") is False:
+            return "%s does not accept container_init (its node's ~smach_allow_init is false)" % server
         with self._lock:
             pub = self._init_pubs.get(server)
             if pub is None:
