@@ -78,6 +78,9 @@ class AgentParams:
     indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
+    pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')
+    pose_jump_hold: float = _param(2.0, 's the robot holds (zero velocity) while doubting a jump; a jumped '
+                                   'pose still reported after that is accepted')
     home: List[float] = _param([], 'x, y, z of home; empty: the first pose received', lengths=(0, 3))
     door_outside: List[float] = _param(list(C.UGV_DOOR_OUTSIDE), 'UGV: x, y in front of the door',
                                        lengths=(2,))

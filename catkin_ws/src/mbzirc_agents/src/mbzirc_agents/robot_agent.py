@@ -53,6 +53,8 @@ class RobotAgent(Agent):
         self.pose_msg: Optional[PoseStamped] = None
         # (stamp s, pose) of the last seconds: detections are placed with the pose at their image's time
         self.pose_history: deque = deque(maxlen=C.POSE_HISTORY_LEN)
+        self.pose_doubt_since: Optional[float] = None    # a GNSS jump is doubted since then (backend time)
+        self.pose_time = -math.inf                       # backend time of the last accepted pose
         self.ual_state = C.UAL_UNINITIALIZED
         self.water_level = float('nan')
         self.blanket_attached = False
@@ -111,6 +113,8 @@ class RobotAgent(Agent):
             self.backend.logerr_throttle(5.0, 'ual/pose: NaN or invalid orientation, ignored')
             return
         stamp = msg.header.stamp.to_sec() or self.backend.now()
+        if self._doubt_jump(np.array([p.x, p.y, p.z])):
+            return
         with self.state_lock:
             self.pose = np.array([p.x, p.y, p.z, yaw])
             self.pose_msg = msg
@@ -119,6 +123,49 @@ class RobotAgent(Agent):
             self.pose_history.append((stamp, self.pose))
             if self.home is None:
                 self.home = np.array([p.x, p.y, p.z])
+
+    def _doubt_jump(self, xyz: np.ndarray) -> bool:
+        """True when this reported position jumped more than ~pose_jump_max from the last accepted one
+        (a GNSS re-fix or a glitch): the robot holds with zero velocity and the pose is ignored for
+        ~pose_jump_hold s; a jump still reported after that is the new truth of the receiver, accepted. A
+        pose after a silence of more than a second (a link cut) is no jump: the robot may have moved.
+
+        Why hold with a velocity command: a waypoint is flown in the (jumped) GNSS frame, a zero velocity
+        keeps the robot where it physically is; tasks keep their last pose meanwhile (send_waypoint and
+        send_velocity hold instead, see pose_in_doubt)."""
+        now = self.backend.now()
+        with self.state_lock:
+            last = None if self.pose is None or now - self.pose_time > 1.0 else self.pose[:3].copy()
+        if last is None or float(np.linalg.norm(xyz - last)) <= self.p.pose_jump_max:
+            if self.pose_doubt_since is not None:
+                self.backend.logwarn(f'ual/pose: back within {self.p.pose_jump_max:.1f} m of the last pose, '
+                                     'moving on')
+            self.pose_doubt_since = None
+            self.pose_time = now
+            return False
+        if self.pose_doubt_since is None:
+            self.pose_doubt_since = now
+        if now - self.pose_doubt_since >= self.p.pose_jump_hold:
+            self.backend.logwarn(f'ual/pose: jumped {np.linalg.norm(xyz - last):.1f} m and stayed there for '
+                                 f'{self.p.pose_jump_hold:.1f} s: accepted as the new position')
+            self.pose_doubt_since = None
+            self.pose_time = now
+            return False
+        self.backend.logerr_throttle(2.0, f'ual/pose jumped {np.linalg.norm(xyz - last):.1f} m '
+                                          f'(> {self.p.pose_jump_max:.1f} m): doubted, holding')
+        self._hold_still()
+        return True
+
+    def pose_in_doubt(self) -> bool:
+        """True while a GNSS jump is being doubted (motion commands become a hold)."""
+        return self.pose_doubt_since is not None
+
+    def _hold_still(self) -> None:
+        if self.is_moving_state():
+            msg = TwistStamped()
+            msg.header.stamp = self._stamp()
+            msg.header.frame_id = C.GLOBAL_FRAME
+            self.vel_pub.publish(msg)
 
     def _on_state(self, msg: State) -> None:
         self.ual_state = int(msg.state)
@@ -267,7 +314,10 @@ class RobotAgent(Agent):
 
     # ---- motion primitives ----------------------------------------------------------------------------
     def send_waypoint(self, x: float, y: float, z: float, yaw: float) -> None:
-        """ual/go_to_waypoint, not blocking; TaskError when refused."""
+        """ual/go_to_waypoint, not blocking; TaskError when refused. While the pose is in doubt: a hold."""
+        if self.pose_in_doubt():
+            self._hold_still()
+            return
         req = GoToWaypointRequest()
         req.waypoint.header.frame_id = C.GLOBAL_FRAME
         req.waypoint.header.stamp = self._stamp()
@@ -330,7 +380,11 @@ class RobotAgent(Agent):
         return self.ual_state in (C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL)
 
     def send_velocity(self, v: Sequence[float], yaw_rate: float = 0.0) -> None:
-        """ual/set_velocity in the arena frame (the UAL stops the robot 0.5 s after the last one)."""
+        """ual/set_velocity in the arena frame (the UAL stops the robot 0.5 s after the last one); while the
+        pose is in doubt: a hold (zero velocity)."""
+        if self.pose_in_doubt():
+            self._hold_still()
+            return
         msg = TwistStamped()
         msg.header.stamp = self._stamp()
         msg.header.frame_id = C.GLOBAL_FRAME

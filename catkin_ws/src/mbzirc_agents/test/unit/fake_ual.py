@@ -21,6 +21,7 @@ class FakeUal:
     def __init__(self, backend, pos=(0.0, 0.0, 0.0), speedup=4.0, regions=None):
         self.be = backend
         self.pos = np.array(pos, float)
+        self.gnss_offset = np.zeros(3)   # added to the published pose only (a GNSS jump)
         self.yaw = 0.0
         self.state = State.LANDED_DISARMED
         self.goal = None
@@ -108,7 +109,7 @@ class FakeUal:
                             self.state = State.LANDED_DISARMED
                 if self.pump and self.water > 0:
                     self.water = max(0.0, self.water - 0.2 * self.speedup * dt)
-                pos, yaw, state, water = self.pos.copy(), self.yaw, self.state, self.water
+                pos, yaw, state, water = self.pos + self.gnss_offset, self.yaw, self.state, self.water
             msg = PoseStamped()
             msg.header.frame_id = 'arena'
             msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = pos

@@ -207,3 +207,28 @@ def test_heartbeat_watchdog_runs_on_wall_clock_when_ros_time_stops(uav):
     while not agent.accepting and be.clock.now() < deadline:
         be.clock.sleep(0.05)
     assert agent.accepting
+
+
+def test_gnss_jump_is_doubted_and_the_uav_holds(uav):
+    """Bad input: the reported pose jumps 5 m (a GNSS re-fix). The agent logs it (throttled), keeps its last
+    pose, holds with zero velocity instead of flying on (no waypoint reaches the UAL meanwhile), and takes
+    the new position once it has been reported for ~pose_jump_hold s; a NaN pose is ignored with an error."""
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    before = agent.position()[:3].copy()
+    n_wp = len(ual.waypoints)
+    ual.gnss_offset = np.array([5.0, 0.0, 0.0])
+    be.clock.sleep(0.5)
+    assert np.allclose(agent.position()[:3], before, atol=0.3) and agent.pose_in_doubt()
+    assert any('jumped 5.0 m' in e for e in be.errors)
+    agent.send_waypoint(10.0, 10.0, 3.0, 0.0)               # a task's command while in doubt: a hold
+    assert len(ual.waypoints) == n_wp
+    holds = [m for m in be.pubs.get('ual/set_velocity', []) if m.twist.linear.x == m.twist.linear.y == 0.0]
+    assert holds
+    be.clock.sleep(3.0 * agent.p.pose_jump_hold)
+    assert not agent.pose_in_doubt()
+    assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
+    nan = pose(float('nan'), 0.0, 3.0, 0.0)
+    agent._on_pose(nan)
+    assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
+    assert any('NaN' in e for e in be.errors)
