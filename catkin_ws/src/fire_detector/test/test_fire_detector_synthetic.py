@@ -60,9 +60,10 @@ class TestFireDetectorSynthetic(unittest.TestCase):
             self.assertEqual((im.img_width, im.img_height), (32, 32))
             want_dir = ThermalImage.CAMERA_DIRECTION_FORWARD if self.scene.direction == 1 else ThermalImage.CAMERA_DIRECTION_DOWNWARD
             self.assertEqual(im.camera_direction, want_dir)
-            self.assertTrue(0 <= im.u < 32 and 0 <= im.v < 32 and im.width >= 1 and im.height >= 1)
+            # the original's u, v: offsets from the image centre (px); its fixed 3.5 px size
+            self.assertTrue(abs(im.u) <= 16 and abs(im.v) <= 16 and im.width == im.height == 3.5)
             self.assertAlmostEqual(im.depth, self.scene.distance, delta=0.4)
-            self.assertAlmostEqual(o.pose.covariance[0], 1.5)
+            self.assertAlmostEqual(o.pose.covariance[0], 1.5 ** 2)      # covariance_x is a std: its variance
             p = o.pose.pose.position
             errors.append(float(np.linalg.norm(np.array([p.x, p.y, p.z]) - truth)))
         self.assertLess(float(np.median(errors)), 0.35, f"position errors {errors}")
