@@ -22,7 +22,7 @@ LASER_RANGE_MAX = 25.0
 LASER_RANGE_MIN = 0.15
 AMBIENT = 30.0
 ATTEN_DIST = 6.0
-# The C3 world's heat sources (c3_world.md; same figures as ual_sim's model): facade holder = ring of
+# The C3 world's heat sources (docs/c3_world.md; same figures as ual_sim's model): facade holder = ring of
 # flames (0.4 m, 250 degC) around the hole with a heater (0.15 m, 120 degC), both cooling as the fire is
 # filled with water; ground fire = plate of 0.5 m at 120 degC (45 under a blanket); inactive holder 28;
 # sun-heated facades and roofs 40-45; interior walls 31; ground 34.
@@ -238,7 +238,7 @@ def scene_truth(scene: ThermalScene) -> Optional[Tuple[float, float, float]]:
     return None
 
 
-# Named scenes of the C3 world (c3_world.md), used by the synthetic publisher, the rostests and the
+# Named scenes of the C3 world (docs/c3_world.md), used by the synthetic publisher, the rostests and the
 # recordings: the UAV hovers in front of / above a known fire holder.
 NAMED_SCENES = {
     # facade A (y = 19.5), holder (17.4, 19.5, 10.5), active; UAV 3 m in front, facing +y

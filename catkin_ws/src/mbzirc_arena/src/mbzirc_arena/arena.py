@@ -55,7 +55,7 @@ class Holder:
 
 @dataclass(frozen=True)
 class Opening:
-    """A window or door of an outer wall; its place is known to about +-1 m (c3_world.md)."""
+    """A window or door of an outer wall; its place is known to about +-1 m (docs/c3_world.md)."""
     kind: str            # 'window' | 'door'
     building: str
     wall: str

@@ -1,4 +1,4 @@
-"""The default Challenge 3 arena: the plan a team has before the trial (c3_world.md, docs/arena_knowledge.md).
+"""The default Challenge 3 arena: the plan a team has before the trial (docs/c3_world.md, docs/arena_knowledge.md).
 
 `ARENA` is what `arena_from_world` reads from the public part of ual_sim's default world
 (`test_c3_default.py` checks that they are equal); a node given a `~world_file` loads that file's arena

@@ -2,7 +2,7 @@
 
 The central unit node calls `Strategy.decide(world)` at every tick with a `WorldView` rebuilt from the
 agents' data_feeds and /estimated_objects, sends the returned `Command`s as action goals, and reports
-each outcome with `Strategy.on_result`. The strategy follows architecture.md ("Central unit"):
+each outcome with `Strategy.on_result`. The strategy follows docs/architecture.md ("Central unit"):
 
 1. the UGV searches the ground floor indoors through the door and puts out what it finds;
 2. the blanket UAV visits the outdoor fire holders, covers a fire, gets a new blanket at home, repeats;

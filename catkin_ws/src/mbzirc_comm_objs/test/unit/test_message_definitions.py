@@ -1,4 +1,4 @@
-"""The message, service and action definitions against the design (architecture.md).
+"""The message, service and action definitions against the design (docs/architecture.md).
 
 The types that cross the original system's interfaces must be wire-identical to the original: same field
 names, types, order and constants, hence the same md5sum. A changed comment is harmless; a changed field,
@@ -11,7 +11,7 @@ import pytest
 from mbzirc_comm_objs import msg as M, srv as S
 from uav_abstraction_layer import msg as UM, srv as US
 
-# The md5 table at the end of architecture.md.
+# The md5 table at the end of docs/architecture.md.
 WIRE_MD5 = {
     M.ObjectDetection: "afa29357bc81a2722453a0e50fa8a374",
     M.ObjectDetectionList: "f1202b9827b40df31c327bbe8356bb82",
