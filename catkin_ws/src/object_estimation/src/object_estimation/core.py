@@ -23,6 +23,7 @@ Track life:
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Sequence
 
@@ -99,14 +100,19 @@ class ObjectEstimator:
         default_covariance: variances (m^2) x, y, z used when a detection carries no valid covariance
             (the fire detector's `covariance_x/y/z` convention).
         process_noise: variance (m^2) added per update so that a track never becomes overconfident.
+        pose_std: standard deviation (m) of the robots' own position error (standard GNSS). It is a bias
+            that wanders slowly, so it does not average out over one robot's detections: it is added to
+            every detection's covariance, and no fused track is more certain than it.
     """
 
     def __init__(self, gates: Optional[Dict[int, float]] = None, default_gate: float = 2.0,
                  min_updates: int = 5, lost_time: float = 10.0,
                  default_covariance: Sequence[float] = (1.5, 1.5, 0.5), process_noise: float = 1e-3,
                  buildings: Sequence[Sequence[float]] = c3.FOOTPRINTS, chi2_gate: float = 16.27,
-                 merge_distances: Optional[Dict[int, float]] = None, min_std: float = 0.4) -> None:
+                 merge_distances: Optional[Dict[int, float]] = None, min_std: float = 0.4,
+                 pose_std: float = 0.0) -> None:
         self.min_var = float(min_std) ** 2
+        self.pose_var = float(pose_std) ** 2 if math.isfinite(pose_std) else 0.0
         self.merge_distances = dict(merge_distances or {C.TYPE_FIRE: 1.5, C.TYPE_HOLE: 0.15})
         self.gates = dict(gates or {C.TYPE_FIRE: 5.0, C.TYPE_HOLE: 0.4})
         self.chi2_gate = float(chi2_gate)
@@ -130,7 +136,7 @@ class ObjectEstimator:
         z = np.asarray(det.position, dtype=float).reshape(3)
         if not np.all(np.isfinite(z)):
             raise ValueError('detection position is not finite')
-        r = sane_covariance(det.covariance, self.default_cov)
+        r = sane_covariance(det.covariance, self.default_cov) + np.eye(3) * self.pose_var
         track = self._associate(det.type, z, r)
         if track is None:
             self._born += 1
@@ -143,6 +149,8 @@ class ObjectEstimator:
             k = p @ np.linalg.inv(p + r)
             self._move(track, track.position + k @ (z - track.position))
             track.covariance = (np.eye(3) - k) @ p
+            if self.pose_var > 0.0:
+                track.covariance = floor_covariance(track.covariance, self.pose_var)
             track.num_updates += 1
             track.last_update = max(track.last_update, det.stamp)
             track = self._merge_near(track)

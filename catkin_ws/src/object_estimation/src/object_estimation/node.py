@@ -42,7 +42,8 @@ class EstimatorNode:
                    C.TYPE_HOLE: float(rospy.get_param('~hole_gate', 0.4))},
             chi2_gate=float(rospy.get_param('~chi2_gate', 16.27)),
             min_updates=int(rospy.get_param('~min_updates', 5)),
-            lost_time=float(rospy.get_param('~lost_time', 10.0)), default_covariance=cov)
+            lost_time=float(rospy.get_param('~lost_time', 10.0)), default_covariance=cov,
+            pose_std=float(rospy.get_param('~pose_std', 0.7)))
         self.publish_tentative = bool(rospy.get_param('~publish_tentative', False))
         self.lock = threading.Lock()
         self.state_file = str(rospy.get_param('~state_file', '') or '')
