@@ -105,8 +105,7 @@ class Agent:
     def start(self) -> None:
         """Build the state machine, start its thread and the action servers."""
         self.sm = AgentStateMachine(self, self.specs)
-        self._sm_thread = threading.Thread(target=self._run_sm, name='agent_sm', daemon=True)
-        self._sm_thread.start()
+        self._sm_thread = self.backend.start_thread('agent_sm', self._run_sm)
         for name, spec in self.specs.items():
             self._servers[name] = self.backend.action_server(
                 f'{name}_action', spec.action, lambda goal, n=name: self._execute_goal(n, goal))

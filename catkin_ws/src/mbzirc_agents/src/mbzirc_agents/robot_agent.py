@@ -95,9 +95,7 @@ class RobotAgent(Agent):
     def start(self) -> None:
         """Start the agent; drop regions a previous run of this agent (killed, respawned) left behind."""
         super().start()
-        self._watchdog_thread = threading.Thread(target=self._watchdog_loop, name='heartbeat_watchdog',
-                                                 daemon=True)
-        self._watchdog_thread.start()
+        self._watchdog_thread = self.backend.start_thread('heartbeat_watchdog', self._watchdog_loop)
         if self.p.use_regions:
             try:
                 self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, free_all=True))

@@ -95,6 +95,12 @@ class RosBackend:
         if not alarm.wait(2.0 * seconds + 1.0):
             scheduler.cancel(alarm)
 
+    def start_thread(self, name: str, target: Callable[[], None]) -> threading.Thread:
+        """A started daemon thread (the fake backend's threads take part in its simulated clock)."""
+        thread = threading.Thread(target=target, name=name, daemon=True)
+        thread.start()
+        return thread
+
     def wall_time(self) -> float:
         """Monotonic wall-clock seconds (the heartbeat watchdog's clock: it must run when /clock stops)."""
         return time.monotonic()

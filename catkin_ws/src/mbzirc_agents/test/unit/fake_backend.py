@@ -22,7 +22,7 @@ class FakeServer:
     def send(self, goal):
         self.status, self.preempt = None, False
         self.done.clear()
-        threading.Thread(target=self._run, args=(goal,), daemon=True).start()
+        self.clock.start_thread(self._run, goal, name=f'{self.name} goal')
 
     def _run(self, goal):
         self.execute_cb(goal)
@@ -92,6 +92,9 @@ class FakeBackend:
 
     def sleep(self, s):
         self.clock.sleep(s)
+
+    def start_thread(self, name, target):
+        return self.clock.start_thread(target, name=name)
 
     def wall_time(self):
         return self.clock.now()

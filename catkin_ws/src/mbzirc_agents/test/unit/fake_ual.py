@@ -46,8 +46,7 @@ class FakeUal:
             (r.max_corner.point.x, r.max_corner.point.y, r.max_corner.point.z))[0])
         h['/free_regions'] = lambda r: FreeRegionsResponse(success=self.regions.free(r.agent_id, r.label, r.free_all))
         self.stop = False
-        self.thread = threading.Thread(target=self._loop, daemon=True)
-        self.thread.start()
+        self.thread = backend.clock.start_thread(self._loop, name='fake UAL')
 
     def _pump(self, on):
         self.pump = on

@@ -3,9 +3,10 @@ waits on it, straight to the earliest wake-up, so a test of 60 s of robot time r
 
 Why: the agent is threaded (state machine, action servers, heartbeat watchdog) and its tasks sleep and
 poll on the backend's clock; on a wall clock the tests waited for real (about 3 minutes). Rules:
-- the thread that makes the clock takes part, and any other thread once it calls `sleep` or `wait`; time
-  does not move while any such thread runs (a participant that blocks on anything else, e.g. a bare
-  `time.sleep`, stalls the clock: use this one);
+- the thread that makes the clock takes part, a thread started with `start_thread` (the backend's
+  `start_thread`) from its start, and any other thread once it calls `sleep` or `wait`; time does not move
+  while any such thread runs (a participant that blocks on anything else, e.g. a bare `time.sleep`, stalls
+  the clock: use this one);
 - `wait(event, timeout)` returns as soon as the event is set (checked before time moves on);
 - `stop()` (the backend's shutdown) wakes everybody; later calls return at once, after a 1 ms wall yield
   so that a stray loop left behind by a failed test cannot spin a core.
@@ -25,6 +26,16 @@ class SimClock:
         self._participants = {threading.current_thread()}
         self._waiting = {}              # thread -> (deadline or None, event or None)
         self._stopped = False
+
+    def start_thread(self, target, *args, name=None):
+        """Start a daemon thread that takes part from the start: time waits for it until it first waits
+        (a thread that joined only at its first wait could find seconds gone, e.g. an action server's
+        thread by the time it hands the goal over)."""
+        t = threading.Thread(target=target, args=args, name=name, daemon=True)
+        with self._cv:
+            self._participants.add(t)
+        t.start()
+        return t
 
     def now(self):
         """Simulated seconds."""
@@ -76,7 +87,8 @@ class SimClock:
     def _advance_if_all_wait(self):
         """Called with the lock held: when every live participant waits and none can go on, move time
         to the earliest deadline and wake everybody."""
-        self._participants = {t for t in self._participants if t.is_alive()}
+        # a thread not started yet (ident None) is about to run: it counts as running
+        self._participants = {t for t in self._participants if t.ident is None or t.is_alive()}
         if any(t not in self._waiting for t in self._participants):
             return
         deadlines = []

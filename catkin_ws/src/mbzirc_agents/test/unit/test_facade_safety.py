@@ -6,7 +6,6 @@ and always emptied the tank. Here the UAV sits at the standoff of a holder on th
 building (x = 11.4); detections, laser and thermal answers are scripted.
 """
 import math
-import threading
 
 import numpy as np
 import pytest
@@ -54,7 +53,7 @@ class Scene:
         self.hot = lambda: True
         self.stop = False
         be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
-        threading.Thread(target=self._loop, daemon=True).start()
+        be.clock.start_thread(self._loop, name='scene')
 
     def _loop(self):
         while not self.stop:
@@ -133,7 +132,7 @@ def test_cold_answers_off_the_hole_do_not_count(scene):
             be.clock.sleep(0.02)
         ual.speedup = 0.0                          # frozen: it cannot re-centre, no more water flows
         sc.hole = np.array(HOLDER) + np.array([0.0, 0.45, 0.0])
-    threading.Thread(target=move_hole_once_pumping, daemon=True).start()
+    be.clock.start_thread(move_hole_once_pumping)
     s, status = extinguish(be)
     assert status == 'aborted' and 'not done after' in s.result.message, (status, s.result.message)
     assert sc.statuses == []
@@ -239,7 +238,7 @@ def test_a_decoy_taken_for_the_hole_is_dropped_for_the_opening(scene):
             if on_hole() and ual.pump:
                 water_on_hole.append(1)
             be.clock.sleep(0.1)
-    threading.Thread(target=openings_after_the_first_lock, daemon=True).start()
+    be.clock.start_thread(openings_after_the_first_lock)
     s, status = extinguish(be, timeout=40)
     assert status == 'succeeded', s.text
     assert s.result.extinguished, s.result.message

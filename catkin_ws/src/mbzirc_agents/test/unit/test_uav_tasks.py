@@ -157,7 +157,7 @@ def _beating(agent, period=0.1):
         while not agent.backend.clock.wait(stop, period):
             agent._on_heartbeat(None)
     agent._on_heartbeat(None)
-    threading.Thread(target=loop, daemon=True).start()
+    agent.backend.clock.start_thread(loop, name='central unit heartbeat')
     return stop
 
 
