@@ -96,6 +96,38 @@ def front_distance(ranges: Sequence[float], angle_min: float, angle_increment: f
     return float(np.min(r[ok] * np.cos(a[ok])))
 
 
+def nearest_return(ranges: Sequence[float], angle_min: float, angle_increment: float,
+                   range_min: float = 0.0) -> Tuple[float, float]:
+    """(distance, body angle) of the closest valid return of a LaserScan, (inf, 0) when none. The laser
+    measures the walls around the robot as they are, whatever its GNSS error (the arena model placed
+    with the reported pose may be a metre off)."""
+    r = np.asarray(ranges, dtype=float)
+    if r.size == 0 or not math.isfinite(angle_min) or not math.isfinite(angle_increment):
+        return math.inf, 0.0
+    ok = np.isfinite(r) & (r > max(0.0, range_min))
+    if not ok.any():
+        return math.inf, 0.0
+    i = int(np.argmin(np.where(ok, r, np.inf)))
+    return float(r[i]), float(angle_min + angle_increment * i)
+
+
+def keep_off_return(v: Sequence[float], yaw: float, distance: float, body_angle: float,
+                    min_dist: float) -> np.ndarray:
+    """v without its component toward the laser's nearest return when closer than min_dist (and a push
+    away when closer than 0.8 x min_dist)."""
+    v = np.array(v, dtype=float)
+    if not math.isfinite(distance) or distance >= min_dist:
+        return v
+    a = yaw + body_angle
+    toward_dir = np.array([math.cos(a), math.sin(a), 0.0])
+    toward = float(v @ toward_dir)
+    if toward > 0:
+        v = v - toward * toward_dir
+    if distance < 0.8 * min_dist:
+        v = v - 0.3 * toward_dir
+    return v
+
+
 def thermal_pixel_to_ground(u: float, v: float, height: float, width_px: int = 32, height_px: int = 32,
                             fov_deg: float = 33.0) -> np.ndarray:
     """Body-frame (x, y) offset on the ground of pixel (u, v) of the DOWNWARD thermal camera.

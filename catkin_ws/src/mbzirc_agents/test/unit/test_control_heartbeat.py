@@ -95,3 +95,23 @@ def test_keep_off_walls_ignores_a_roof_below():
     assert keep_off_walls((25.0, 18.8, 12.5), np.array([-0.3, 0.0, 0.0]), 1.0)[0] >= 0.0
     # at 3 m the extension's edge is a wall again
     assert keep_off_walls((25.7, 20.2, 3.0), v, 1.0)[1] > 0
+
+
+def test_nearest_return_skips_nan_inf_and_too_close_beams():
+    r = [float('nan'), 5.0, float('inf'), 0.05, 0.9, 3.0]
+    d, a = c.nearest_return(r, -math.pi, 0.5, range_min=0.15)
+    assert d == 0.9 and a == pytest.approx(-math.pi + 2.0)
+    assert c.nearest_return([float('nan')] * 10, -math.pi, 0.1) == (math.inf, 0.0)
+    assert c.nearest_return([], 0.0, 0.1) == (math.inf, 0.0)
+
+
+def test_keep_off_the_laser_return_whatever_the_pose_says():
+    """The laser sees a wall 0.6 m to the robot's left (yaw 0: +y); a velocity towards it loses that
+    component, and under 0.8 x min_dist it is pushed away; other directions are untouched."""
+    v = c.keep_off_return([0.5, 0.5, 0.0], 0.0, 0.9, math.pi / 2, 1.0)
+    assert v == pytest.approx([0.5, 0.0, 0.0])
+    v = c.keep_off_return([0.0, 0.5, 0.0], 0.0, 0.6, math.pi / 2, 1.0)
+    assert v[1] < 0.0
+    assert c.keep_off_return([0.0, -0.5, 0.0], 0.0, 0.6, math.pi / 2, 1.0)[1] < -0.5 + 1e-9
+    assert c.keep_off_return([0.3, 0.3, 0.1], 0.0, 1.5, 0.0, 1.0) == pytest.approx([0.3, 0.3, 0.1])
+    assert c.keep_off_return([0.3, 0.3, 0.1], 0.0, math.inf, 0.0, 1.0) == pytest.approx([0.3, 0.3, 0.1])

@@ -16,7 +16,8 @@ from sensor_msgs.msg import LaserScan
 from mbzirc_arena.buildings import nearest_face, standing_at
 
 from .. import constants as C
-from ..control import HoleCentering, body_to_world, front_distance, world_to_body, yaw_rate_to
+from ..control import (HoleCentering, body_to_world, front_distance, keep_off_return, nearest_return,
+                       world_to_body, yaw_rate_to)
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall
 from .cold_check import ColdConfirmation, dry_tank_verdict
@@ -170,6 +171,8 @@ class ExtinguishFacadeFire(AgentTask):
         self.locked_open = False                # the depth camera saw through the locked circle
         self.lock_count = 0                     # how many locks this run (a new lock resets "cold")
         self._front = (math.inf, -1e9)          # (laser distance ahead m, receive time)
+        self._nearest = (math.inf, 0.0, -1e9)   # (laser's nearest return m, its body angle, receive time)
+        self._blind_since: Optional[float] = None   # every beam of the scans NaN since then
         self.iface.add_subscriber(self.name, 'scan', LaserScan, self._on_scan)
         # switches the (lazy) circle detector on while this task runs: holes arrive in sensed_objects
         self.iface.add_demand(self.name, C.HOLE_DEMAND_TOPIC, PointStamped)
@@ -180,8 +183,26 @@ class ExtinguishFacadeFire(AgentTask):
                 or msg.angle_increment <= 0):
             self.agent.backend.logerr_throttle(5.0, 'scan: empty or bad angles, ignored')
             return
-        self._front = (front_distance(msg.ranges, msg.angle_min, msg.angle_increment),
-                       self.agent.backend.now())
+        now = self.agent.backend.now()
+        if np.isnan(np.asarray(msg.ranges, dtype=float)).all():
+            self.agent.backend.logerr_throttle(5.0, 'scan: every beam NaN (laser blind): holding')
+            self._blind_since = now if self._blind_since is None else self._blind_since
+            return
+        self._blind_since = None
+        self._front = (front_distance(msg.ranges, msg.angle_min, msg.angle_increment), now)
+        self._nearest = (*nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min), now)
+
+    def laser_blind(self) -> bool:
+        """True while the scans carry no valid beam at all: no velocity towards a wall we cannot see."""
+        return self._blind_since is not None
+
+    def keep_off_laser(self, v: np.ndarray, yaw: float, min_dist: float) -> np.ndarray:
+        """v kept off the laser's nearest return (fresh scans only): walls as they are, whatever the GNSS
+        error of the pose the arena model is placed with."""
+        d, ang, t = self._nearest
+        if self.agent.backend.now() - t > C.SCAN_MAX_AGE:
+            return v
+        return keep_off_return(v, yaw, d, ang, min_dist)
 
     def front_range(self) -> float:
         """Laser distance to the wall ahead (inf when no fresh scan says so)."""
@@ -314,7 +335,10 @@ class ExtinguishFacadeFire(AgentTask):
                 pumping_since = None
             min_wall = a.p.min_wall_distance
             v = ctl.velocity(target, p[3], self.front_range(), min_wall)
-            a.send_velocity(keep_off_walls(p, v, min_wall), yaw_rate_to(p[3], wall_yaw))
+            v = self.keep_off_laser(keep_off_walls(p, v, min_wall), p[3], min_wall)
+            if self.laser_blind():
+                v = np.zeros(3)                         # bad input: hold, the timeouts decide the rest
+            a.send_velocity(v, yaw_rate_to(p[3], wall_yaw))
             state = 'SHOOTING' if pumping_since is not None else 'CENTERING'
             self.feedback(state, f'fire {fire_id}: aim on {source}, error '
                                  f'{np.linalg.norm(ctl.error(target)):.2f} m, water {a.water_level:.2f} L')
