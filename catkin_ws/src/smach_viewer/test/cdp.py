@@ -65,7 +65,7 @@ class HeadlessChromium:
                         self.events.append(msg)
                     self._cond.notify_all()
 
-    def send(self, method, params=None, session=None, timeout=20.0):
+    def send(self, method, params=None, session=None, timeout=60.0):
         with self._cond:
             self._next_id += 1
             mid = self._next_id

@@ -16,6 +16,7 @@ from smach_ros.userdata_codec import DecodeError, decode_local_data, to_plain
 __all__ = ["ViewerModel", "ContainerView", "build_dot"]
 
 STALE_AFTER_S = 10.0  # a server silent this long (no heartbeat) is shown as stale
+WIDE_CONTAINER_CHILDREN = 8  # a container with more children is laid out left-right
 MAX_DEBUG_STATUS_CHARS = 256 * 1024  # a server's debug status is sent to every browser: bounded
 
 
@@ -205,7 +206,11 @@ def build_dot(server: str, containers: dict, collapsed: Optional[set] = None) ->
     containers = {p: v for p, v in containers.items()
                   if not any(p.startswith(c + "/") for c in collapsed)}  # inside a collapsed one: hidden
     roots = [p for p in containers if p.rsplit("/", 1)[0] not in containers]
-    lines = ["digraph smach {", "  compound=true; rankdir=TB; newrank=true;",
+    # a container of many states (an agent: one idle state and a state per task) laid out top-down is one
+    # very wide row; left-right it becomes a column that fits beside the side panel
+    widest = max((len(v.children) for v in containers.values()), default=0)
+    rankdir = "LR" if widest > WIDE_CONTAINER_CHILDREN else "TB"
+    lines = ["digraph smach {", "  compound=true; rankdir=%s; newrank=true;" % rankdir,
              '  graph [fontname="Helvetica", fontsize=12];', '  node [fontname="Helvetica", fontsize=11];',
              '  edge [fontname="Helvetica", fontsize=9];']
     edges: list[str] = []

@@ -244,6 +244,8 @@ def test_debug_api_forwards_commands():
 
 def test_collapsed_container_graph():
     model = ViewerModel()
+    model.update_structure("/t", "/R", ["A", "B"], [], [], [], ["done"])
+    assert "rankdir=TB" in model.dot("/t")  # small containers: top-down
     model.update_structure("/s", "/R", ["A", "SUB"], ["go", "x"], ["A", "SUB"], ["SUB", "done"], ["done"])
     model.update_structure("/s", "/R/SUB", ["X"], ["x"], ["X"], ["None"], ["x"])
     dot = model.dot("/s", ["/R/SUB"])
@@ -268,6 +270,7 @@ def test_hundred_states_collapse_to_a_small_graph():
     full = model.dot("/s")
     folded = model.dot("/s", ["/R/" + s for s in subs])
     assert full.count("shape=ellipse") == 100
+    assert "rankdir=LR" in full  # containers of 10 states: left-right
     assert folded.count("shape=ellipse") == 0 and folded.count("shape=box3d") == 10
     if shutil.which("dot"):
         import time
