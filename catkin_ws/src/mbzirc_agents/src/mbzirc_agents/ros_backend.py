@@ -22,11 +22,22 @@ SERVICE_TIMEOUT = 5.0    # s (wall) before a service call of an agent gives up
 ACTION_STATUS_PERIOD = 1.0
 
 
+def _publish_status_if_free(server: Any) -> None:
+    """The periodic status of an actionlib ActionServer, skipped while another thread holds the server's
+    lock (a goal being accepted or finished publishes its status anyway): the periodic callbacks share
+    one thread, which must not wait on a server."""
+    if server.lock.acquire(blocking=False):
+        try:
+            server.publish_status_async(None)
+        finally:
+            server.lock.release()
+
+
 class RosBackend:
     """rospy implementation of the backend used by AgentInterface and Agent.
 
-    Timers, sleeps and the action servers' periodic status run from one RosTimeScheduler thread (started
-    with the first of them) instead of a thread each that rospy wakes on every /clock message."""
+    Timers, sleeps and the action servers' periodic status run from the RosTimeScheduler (two threads,
+    started with the first of them) instead of a thread each that rospy wakes on every /clock message."""
 
     def __init__(self):
         self._scheduler = None
@@ -66,9 +77,9 @@ class RosBackend:
         server.start()
         inner = getattr(server, 'action_server', None)
         status_timer = getattr(inner, 'status_timer', None)
-        if status_timer is not None and hasattr(inner, 'publish_status_async'):
+        if status_timer is not None and hasattr(inner, 'publish_status_async') and hasattr(inner, 'lock'):
             status_timer.shutdown()
-            self.scheduler().every(ACTION_STATUS_PERIOD, inner.publish_status_async)
+            self.scheduler().every(ACTION_STATUS_PERIOD, lambda _e, s=inner: _publish_status_if_free(s))
         return server
 
     def timer(self, period: float, callback: Callable[[Any], None]) -> Any:
