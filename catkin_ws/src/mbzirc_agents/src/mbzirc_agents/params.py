@@ -76,6 +76,8 @@ class AgentParams:
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
     entry_depth: float = _param(2.5, 'm flown straight in through a window')
     indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
+    aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
+                                          'image is straight ahead (else the robot turns to it first)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
     pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')

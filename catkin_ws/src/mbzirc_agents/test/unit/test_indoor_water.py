@@ -97,3 +97,24 @@ def test_cold_only_after_the_tank_ran_dry(scenes, water, out):
     assert sc.ual.water <= 0.1
     if not out:
         assert 'top-up' in s.result.message
+
+
+def test_the_robot_turns_to_the_hot_spot_before_pumping(scenes):
+    """The thermal camera sees the fire 0.3 rad to the left of the heading (the estimate was faced from a
+    pose off by its GNSS error): the robot turns by that much before the water flows."""
+    import math
+    from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
+    sc = scenes(hot_until=1.0)
+    yaw0 = []
+
+    def answer(_req):
+        yaw0.append(sc.ual.yaw)
+        det = ObjectDetection(type=C.TYPE_FIRE)       # where the camera sees it, from the current heading
+        det.relative_position.x = 1.5
+        det.relative_position.y = 1.5 * math.tan(0.3 - (sc.ual.yaw - yaw0[0]))
+        sc.be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
+        return CheckFireResponse(fire_detected=sc.hot())
+    sc.be.handlers['thermal_detection/fire_detected'] = answer
+    s = sc.extinguish()
+    assert s.status == 'succeeded', s.result.message
+    assert sc.ual.yaw == pytest.approx(yaw0[0] + 0.3, abs=0.05)

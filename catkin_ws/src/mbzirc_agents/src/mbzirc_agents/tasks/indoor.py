@@ -14,6 +14,7 @@ from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from .cold_check import ColdConfirmation, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
+from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 TOP_UP_MAX_STD = 0.4       # m: and its position known at least this well
@@ -123,8 +124,33 @@ class SearchIndoor(AgentTask):
 
 
 class ExtinguishIndoorFire(AgentTask):
-    """Face the fire at ~indoor_fire_distance (from the side the robot is on) and pump until cold."""
+    """Face the fire at ~indoor_fire_distance (from the side the robot is on), turn until the thermal hot
+    spot is straight ahead, and pump until cold."""
     INPUT_KEYS = ['fire_id']
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.sensed = SensedObjects(self)
+
+    def _face_the_heat(self, tries: int = 3) -> None:
+        """Turn so that the thermal camera's fire is straight ahead (its bearing from the detection's body
+        relative position). Why: there is no hole to aim at indoors, and the pose the fire estimate was
+        faced from carries the GNSS error; the jet leaves along the heading (seen under realistic
+        uncertainty: 2 L pumped beside an indoor fire, 18 % of it in)."""
+        a = self.agent
+        for _ in range(tries):
+            with self.sensed.lock:
+                fire, seen = self.sensed.fire, self.sensed.fire_time
+            if fire is None or a.backend.now() - seen > 1.0:
+                return
+            bearing = math.atan2(fire[1][1], fire[1][0])
+            if not math.isfinite(bearing) or abs(bearing) < a.p.aim_bearing_tolerance:
+                return
+            p = a.position()
+            self.feedback('AIMING', f'turning {math.degrees(bearing):.0f} deg to the hot spot')
+            a.send_waypoint(p[0], p[1], p[2], p[3] + bearing)
+            self.sleep(1.0)
+            self.sensed.fire = None                      # only detections of the new heading count
 
     def run(self, ud) -> str:
         a = self.agent
@@ -142,6 +168,7 @@ class ExtinguishIndoorFire(AgentTask):
             if not self._well_localised(ud.fire_id):
                 raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
             return self._top_up(ud.fire_id)
+        self._face_the_heat()
         try:
             a.start_pump()
             start = a.backend.now()
