@@ -10,6 +10,7 @@ import numpy as np
 import rospy
 from geometry_msgs.msg import PointStamped
 from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
+from mbzirc_ros_utils.periodic import PeriodicTimer
 from sensor_msgs.msg import CameraInfo, Image
 from visualization_msgs.msg import Marker
 
@@ -75,7 +76,8 @@ class CircleDetectorNode:
         self.demand_timer = None
         if self.lazy:
             # like image_proc's lazy nodelets: camera images only while someone listens to an on-demand output
-            self.demand_timer = rospy.Timer(rospy.Duration(LAZY_POLL_S), self.check_demand)
+            # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
+            self.demand_timer = PeriodicTimer(LAZY_POLL_S, self.check_demand, 'circle detector demand')
         else:
             self.subscribe_camera()
         rospy.loginfo("circle_detector: radius %.2f-%.2f m, depth < %.1f m, downscale %d, rectify %s, lazy %s",

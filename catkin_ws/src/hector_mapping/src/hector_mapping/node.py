@@ -15,6 +15,7 @@ from typing import Optional
 import numpy as np
 import rospy
 import tf2_ros
+from mbzirc_ros_utils.periodic import PeriodicTimer
 from geometry_msgs.msg import (Point32, PoseStamped, PoseWithCovarianceStamped, TransformStamped)
 from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
 from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
@@ -126,7 +127,8 @@ class HectorMappingNode:
         rospy.Subscriber(str(p["scan_topic"]), LaserScan, self._on_scan,
                          queue_size=int(p["scan_subscriber_queue_size"]), buff_size=1 << 20)
         period = float(p["map_pub_period"])
-        self.map_timer = rospy.Timer(rospy.Duration(max(period, 0.05)), self._on_map_timer)
+        # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
+        self.map_timer = PeriodicTimer(max(period, 0.05), self._on_map_timer, 'hector map publication')
 
     # ---- scans ---------------------------------------------------------------------------------
     def _on_scan(self, msg: LaserScan) -> None:

@@ -13,6 +13,7 @@ from typing import Any
 
 import rospy
 from mbzirc_comm_objs.msg import AgentDataFeed
+from mbzirc_ros_utils.periodic import PeriodicTimer
 from std_msgs.msg import Bool, String
 
 from mbzirc_arena import c3
@@ -61,7 +62,8 @@ class MissionRecorder:
             self.subs.append(rospy.Subscriber("/sim/score", Score, self._on_score, queue_size=1))
         else:
             rospy.logerr("mission_recorder: ual_sim messages not found: no ground truth, no score")
-        self.timer = rospy.Timer(rospy.Duration(1.0), self._check)
+        # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
+        self.timer = PeriodicTimer(1.0, self._check, 'recorder check')
         rospy.on_shutdown(self._on_shutdown)
 
     # ---- inputs ----------------------------------------------------------------------------------
