@@ -25,9 +25,16 @@ SHOWN_JS = """JSON.stringify({
 class StationPage:
     """Headless Chromium showing the ground station at base_url."""
 
-    def __init__(self, base_url, width=1400, height=850):
-        self.browser = HeadlessChromium()
-        self.browser.open(base_url + "/")
+    def __init__(self, base_url, width=1400, height=850, attempts=3):
+        for attempt in range(attempts):   # a Chromium starting on a busy machine may miss its first calls
+            self.browser = HeadlessChromium()
+            try:
+                self.browser.open(base_url + "/")
+                break
+            except Exception:  # noqa: BLE001
+                self.browser.close()
+                if attempt == attempts - 1:
+                    raise
         self.browser.send("Emulation.setDeviceMetricsOverride", {"width": width, "height": height,
                                                                   "deviceScaleFactor": 1, "mobile": False},
                           session=self.browser.session)

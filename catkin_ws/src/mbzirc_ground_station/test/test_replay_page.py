@@ -36,16 +36,21 @@ def feeds_at(t):
 
 class TestReplayPage(unittest.TestCase):
     @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp(prefix="gcs_replay_")
-        port_file = os.path.join(cls.tmp, "port")
-        cls.proc = subprocess.Popen([sys.executable, os.path.join(PKG, "scripts", "replay"), BAG, "--port", "0",
-                                     "--port-file", port_file])
+    def start_replay(cls, port):
+        """Start the replay node on port (0: any); returns the port it bound."""
+        port_file = os.path.join(tempfile.mkdtemp(prefix="gcs_replay_"), "port")
+        cls.proc = subprocess.Popen([sys.executable, os.path.join(PKG, "scripts", "replay"), BAG, "--port",
+                                     str(port), "--port-file", port_file])
         deadline = time.monotonic() + 30
         while not os.path.exists(port_file) or not open(port_file).read():
             assert time.monotonic() < deadline, "replay did not start"
             time.sleep(0.1)
-        cls.base = "http://127.0.0.1:%s" % open(port_file).read()
+        return int(open(port_file).read())
+
+    @classmethod
+    def setUpClass(cls):
+        cls.port = cls.start_replay(0)
+        cls.base = "http://127.0.0.1:%d" % cls.port
         with rosbag.Bag(BAG) as bag:
             cls.start, cls.end = bag.get_start_time(), bag.get_end_time()
         cls.page = StationPage(cls.base)
@@ -60,7 +65,7 @@ class TestReplayPage(unittest.TestCase):
     def control(self, body):
         req = urllib.request.Request(self.base + "/api/replay", json.dumps(body).encode(),
                                      {"Content-Type": "application/json"})
-        with urllib.request.urlopen(req, timeout=5) as r:
+        with urllib.request.urlopen(req, timeout=30) as r:   # generous: the suite runs on a busy machine
             self.assertEqual(json.load(r), {"ok": True})
 
     def check_positions(self, shown):
@@ -69,7 +74,7 @@ class TestReplayPage(unittest.TestCase):
         self.assertTrue(truth, "no data_feed before %.2f" % t)
         self.assertEqual(sorted(shown["robots"]), sorted(truth))
         for rid, (x, y) in truth.items():
-            px, py, _ = shown["robots"][rid]
+            px, py = shown["robots"][rid][:2]
             self.assertLess(abs(px - x) + abs(py - y), TOL, "robot %s at t=%.2f: page (%.2f, %.2f), bag (%.2f, %.2f)"
                             % (rid, t, px, py, x, y))
 
@@ -77,7 +82,7 @@ class TestReplayPage(unittest.TestCase):
         for dt in (20.0, 5.0, 29.0, 12.5, 12.4):
             target = round(self.start + dt, 2)
             self.control({"action": "seek", "t": target})
-            shown = self.page.wait_for(lambda s: s["replay"] and abs(s["replay"]["t"] - target) < 1e-6, 10,
+            shown = self.page.wait_for(lambda s: s["replay"] and abs(s["replay"]["t"] - target) < 1e-6, 30,
                                        "t = %.2f" % target)
             self.check_positions(shown)
 
@@ -99,6 +104,19 @@ class TestReplayPage(unittest.TestCase):
         moved = max(abs(seen[-1]["robots"][r][0] - seen[0]["robots"][r][0]) +
                     abs(seen[-1]["robots"][r][1] - seen[0]["robots"][r][1]) for r in seen[0]["robots"])
         self.assertGreater(moved, 1.0, "no robot moved on the page while playing")
+
+    def test_z_page_reconnects_after_a_restart(self):
+        """The replay node stops and comes back on the same port: the page shows it and carries on."""
+        self.proc.terminate()
+        self.proc.wait(10)
+        self.page.wait_for(lambda s: s["conn"] != "connected", 30, "the connection lost")
+        self.start_replay(self.port)
+        before = self.page.shown()["frames"]
+        self.page.wait_for(lambda s: s["conn"] == "connected" and s["frames"] > before + 5, 60,
+                           "frames again after the restart")
+        self.control({"action": "seek", "t": self.start + 7.0})
+        self.check_positions(self.page.wait_for(
+            lambda s: s["replay"] and abs(s["replay"]["t"] - (self.start + 7.0)) < 1e-6, 30, "the seek"))
 
 
 if __name__ == "__main__":
