@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from ual_sim.node import Due, quat_yaw, yaw_quat
+from ual_sim.node import AtMostPerWallSecond, Due, quat_yaw, yaw_quat
 
 
 def test_due_holds_the_rate_on_average():
@@ -18,6 +18,25 @@ def test_due_does_not_burst_after_a_gap():
     assert due(0.0)
     assert due(5.0)           # a long gap: one output, not fifty
     assert not due(5.01)
+
+
+def test_clock_messages_at_most_rate_per_wall_second():
+    """/clock of a simulator ticking 240 times a wall second (8x real time at 30 Hz), capped at 100."""
+    wall = [0.0]
+    due = AtMostPerWallSecond(100.0, clock=lambda: wall[0])
+    sent = 0
+    for _ in range(240):
+        sent += due()
+        wall[0] += 1.0 / 240.0
+    assert 90 <= sent <= 100
+
+
+def test_clock_every_tick_below_the_cap_or_without_one():
+    wall = [0.0]
+    capped, uncapped = AtMostPerWallSecond(100.0, clock=lambda: wall[0]), AtMostPerWallSecond(0.0)
+    for _ in range(60):                     # 2x real time: 60 ticks a wall second
+        assert capped() and uncapped()
+        wall[0] += 1.0 / 60.0
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.5, -2.0, math.pi - 1e-3])
