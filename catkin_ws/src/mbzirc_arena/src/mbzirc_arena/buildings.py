@@ -53,16 +53,24 @@ def in_footprint(p: Sequence[float], footprints: Sequence[Sequence[float]], marg
                for b in footprints)
 
 
+# How far a fire estimate may lie off its wall and still be that wall's facade fire: robots place fires with
+# standard GNSS (errors of about a metre, ual_sim README "Uncertainty"), so a facade fire seen from a pose
+# off towards the building lands inside the footprint, one seen from a pose off the other way lands out in
+# the open. Indoor holders are metres inside the outer walls and ground fires far from every wall.
+INDOOR_DEPTH = 1.5      # m inside a footprint before a fire counts as indoors
+GROUND_DISTANCE = 2.0   # m from every wall before a low fire counts as a ground fire
+
+
 def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float]]) -> int:
     """Object SUBTYPE_* of a fire at position, from where it is.
 
-    Rules: more than 0.5 m inside a footprint, under its roof -> INDOOR; lower than 1.5 m and more than 1 m
-    from every wall rising to that height -> GROUND; else (on or near a wall) -> FACADE.
+    Rules: more than INDOOR_DEPTH inside a footprint, under its roof -> INDOOR; lower than 1.5 m and more
+    than GROUND_DISTANCE from every wall rising to that height -> GROUND; else (on or near a wall) -> FACADE.
     """
     under = standing_at(position, footprints, 0.0)   # nothing is indoors above a roof
-    if in_footprint(position, under, margin=-0.5):
+    if in_footprint(position, under, margin=-INDOOR_DEPTH):
         return M.SUBTYPE_INDOOR
     _, d = nearest_face(position, under)
-    if position[2] < 1.5 and d > 1.0:
+    if position[2] < 1.5 and d > GROUND_DISTANCE:
         return M.SUBTYPE_GROUND
     return M.SUBTYPE_FACADE

@@ -30,6 +30,7 @@ def test_floor_of_every_facade_holder_is_its_storey():
                                    ((25.0, 18.8, 12.5), M.SUBTYPE_FACADE), ((30.0, 12.0, 2.0), M.SUBTYPE_INDOOR),
                                    ((17.7, 8.5, 6.5), M.SUBTYPE_INDOOR), ((5.0, 25.0, 0.0), M.SUBTYPE_GROUND)])
 def test_classify_fire(p, sub):
+    """(also with a metre of GNSS error: see test_facade_fires_placed_a_metre_off_stay_facade)"""
     """Above the extension's roof, beside facade D, a fire is a facade fire, not an indoor one."""
     assert c3.classify_fire(p) == sub
 
@@ -100,3 +101,12 @@ def test_yaw():
     assert Y.yaw_from_quaternion(0, 0, 0, 0) is None
     assert Y.yaw_from_quaternion(0, 0, 2 * math.sin(0.5), 2 * math.cos(0.5)) == pytest.approx(1.0)  # unnormalised
     assert Y.wrap_angle(3 * math.pi) == pytest.approx(math.pi)
+
+
+@pytest.mark.parametrize('off', [(0.0, -1.2, 0.0), (0.0, 1.2, 0.0), (0.8, -0.8, -0.3)])
+def test_facade_fires_placed_a_metre_off_stay_facade(off):
+    """Robots place fires with standard GNSS (about a metre of error): a facade fire estimated 1.2 m inside
+    or outside its wall is still a facade fire, also the one 0.75 m above the ground (A_4)."""
+    for h in c3.FACADE_HOLDERS:
+        p = tuple(h[k] + off[k] for k in range(3))
+        assert c3.classify_fire(p) == M.SUBTYPE_FACADE, p
