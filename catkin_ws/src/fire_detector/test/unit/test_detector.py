@@ -11,7 +11,11 @@ from fire_detector.geometry import front_laser_range
 
 
 def run(scene_name, n=25, seed=1, **cfg):
-    scene = S.NAMED_SCENES[scene_name]
+    return run_scene(S.NAMED_SCENES[scene_name], n, seed, **cfg)
+
+
+def run_scene(scene, n=25, seed=1, **cfg):
+    """The detector over n frames of a hovering view of scene: (detector, [(fire, frame's scene)])."""
     mode = "FORWARD" if scene.direction == C.CAMERA_DIRECTION_FORWARD else "DOWNWARD"
     det = FireDetector(DetectorConfig(camera_config=mode, **cfg))
     rng = np.random.default_rng(seed)
@@ -61,25 +65,12 @@ def test_desert_hot_wall_is_no_fire_and_a_fire_on_it_is(wall):
     """Walls at 50-55 degC in the sun (what the old 50 degC floor could not survive): no fire on the bare
     wall, the fire on it found and placed."""
     from dataclasses import replace
-    _, fires = _run_scene(replace(S.NAMED_SCENES["hot_wall"], surface_temp=wall), n=40)
+    _, fires = run_scene(replace(S.NAMED_SCENES["hot_wall"], surface_temp=wall), n=40)
     assert not fires
-    det, fires = _run_scene(replace(S.NAMED_SCENES["facade_fire"], surface_temp=wall, distance=4.0))
+    det, fires = run_scene(replace(S.NAMED_SCENES["facade_fire"], surface_temp=wall, distance=4.0))
     assert det.fire_detected and fires
     errors = [np.linalg.norm(np.subtract(fire.position, s.source_arena())) for fire, s in fires]
     assert np.median(errors) < 0.4
-
-
-def _run_scene(scene, n=25, seed=1, **cfg):
-    det = FireDetector(DetectorConfig(camera_config="FORWARD", **cfg))
-    rng = np.random.default_rng(seed)
-    fires = []
-    for s, frame in S.sequence(scene, rng, n):
-        ranges, amin, inc = S.render_scan(s, rng)
-        lr = front_laser_range(ranges, amin, inc, S.LASER_RANGE_MIN, S.LASER_RANGE_MAX, 5.0)
-        r = det.process(frame.ravel(), s.uav_xyz, s.uav_yaw, lr)
-        if r.fire:
-            fires.append((r.fire, s))
-    return det, fires
 
 
 def test_hot_frames_count_only_within_5_m_and_checkfire_within_7_5_m():
