@@ -202,7 +202,7 @@ class IntrospectionServer:
         if self._allow_init is None:
             self._allow_init = bool(rospy.get_param("~smach_allow_init", True))
         if self._exclude_keys is None:
-            self._exclude_keys = [str(k) for k in rospy.get_param("~smach_exclude_keys", [])]
+            self._exclude_keys = _param_list("~smach_exclude_keys")
         if self._allow_unpickle and self._allow_init:
             rospy.logwarn("IntrospectionServer %s trusts pickles from the network (smach_allow_unpickle)."
                           % self._server_name)
@@ -231,7 +231,7 @@ class IntrospectionServer:
             return
         rospy.logwarn("IntrospectionServer %s offers the SMACH debugger (smach_allow_debug): anyone on the ROS "
                       "network can pause this machine and force outcomes." % self._server_name)
-        breakpoints = self._breakpoints + [str(p) for p in rospy.get_param("~smach_debug_breakpoints", [])]
+        breakpoints = self._breakpoints + _param_list("~smach_debug_breakpoints")
         pub = self._debug_pub
 
         def publish(text: str) -> None:
@@ -338,6 +338,18 @@ class IntrospectionClient:
                 sub.unregister()
         finally:
             pub.unregister()
+
+
+def _param_list(name: str) -> list:
+    """A list-of-names param (a single name is accepted as a list of one); anything else is refused with an
+    error log and treated as empty."""
+    value = rospy.get_param(name, [])
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, list):
+        return [str(v) for v in value]
+    rospy.logerr("IntrospectionServer: param %s must be a list of names, got %r; ignored" % (name, value))
+    return []
 
 
 def child_path(path: str, label: str) -> str:
