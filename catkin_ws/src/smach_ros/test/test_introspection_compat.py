@@ -66,7 +66,7 @@ def nested_writer():
     return sm
 
 
-def wait_until(pred, timeout=10.0):
+def wait_until(pred, timeout=20.0):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         got = pred()
@@ -148,10 +148,11 @@ class TestIntrospectionCompat(unittest.TestCase):
         sub = rospy.Subscriber("compat_c/smach/container_status", SmachContainerStatus, on_status)
         server.start()
         try:
-            wait_until(lambda: sub.get_num_connections() > 0)
+            # connected once a status arrived (get_num_connections can be ahead of the first message)
+            self.assertTrue(wait_until(lambda: statuses, 30), "no status from the server")
             self.assertEqual(root.execute(), "done")
             final = wait_until(lambda: [m for m in list(statuses)
-                                        if m.path == "/C" and m.info.startswith("TERMINATED")])
+                                        if m.path == "/C" and m.info.startswith("TERMINATED")], 20)
             self.assertTrue(final, "no TERMINATED status: the server stopped on unpicklable userdata")
             data = decode_local_data(final[-1].local_data)
             self.assertEqual(data["plain"], 5)
