@@ -267,8 +267,12 @@ class ExtinguishFacadeFire(AgentTask):
                     self.locked_open = self.locked_open or hole_choice.is_opening(holes[i].opening)
                     return np.asarray(holes[i].body, dtype=float), 'hole'
             return world_to_body(self.locked_hole - p[:3], p[3]), 'last hole'
+        seen = self.sensed.recent_fire(0.5)
+        seen = np.array(seen[1]) if seen is not None and seen[2] == C.CAMERA_FORWARD else None
         if holes:
-            expected = world_to_body(fire - p[:3], p[3])
+            # where the fire should be, body frame: where this robot's thermal camera sees it now (relative,
+            # free of the GNSS error that the estimate, placed by other poses or other robots, carries)
+            expected = seen if seen is not None else world_to_body(fire - p[:3], p[3])
             chosen = choose_hole(holes)
             best = None
             if chosen is not None and np.linalg.norm(chosen[1:] - expected[1:]) < 1.0:
@@ -284,9 +288,8 @@ class ExtinguishFacadeFire(AgentTask):
                            f'estimate ({"seen through" if hole_choice.is_opening(best.opening) else "not seen through"}'
                            f'{", middle of three" if best.body is chosen else ""})')
                 return body, 'hole'
-        det = self.sensed.recent_fire(0.5)
-        if det is not None and det[2] == C.CAMERA_FORWARD:
-            return np.array(det[1]), 'thermal'
+        if seen is not None:
+            return seen, 'thermal'
         return world_to_body(fire - p[:3], p[3]), 'estimate'
 
     def _lock(self, world: np.ndarray, seen_through: bool, why: str) -> None:
@@ -325,7 +328,9 @@ class ExtinguishFacadeFire(AgentTask):
                 cold, cold_lock, unseen_cold = ColdConfirmation(), self.lock_count, 0
             p = a.position()
             on_hole = source in ('hole', 'last hole')
-            if ctl.centred(target):
+            # water only where this robot sees the fire or its hole: the estimate carries the GNSS error
+            # of the poses that placed it (seen: a tank pumped beside a fire aimed on it)
+            if ctl.centred(target) and source != 'estimate':
                 centred_once, last_centred = True, now
                 if pumping_since is None:
                     a.start_pump()
