@@ -51,3 +51,13 @@ def test_faces_wall():
     assert not g.faces_wall((30.0, 21.5, 6.5), -math.pi / 2, C.BUILDINGS)    # above the extension roof
     assert g.faces_wall((30.0, 21.5, 2.0), -math.pi / 2, C.BUILDINGS)
     assert not g.faces_wall((12.4, 22.0, 6.5), None, C.BUILDINGS)
+
+
+def test_a_facade_fire_estimate_snaps_to_its_known_holder():
+    """Estimates carry the GNSS error (about a metre): the standoff comes from the public holder they
+    belong to; an estimate far from every holder stays as it is."""
+    from mbzirc_agents.tasks.facade import known_holder
+    a4 = C.FACADE_HOLDERS[4]
+    assert tuple(known_holder((a4[0] + 0.9, a4[1] - 0.7, a4[2] - 0.4))) == tuple(a4)
+    far = (5.0, 5.0, 5.0)
+    assert tuple(known_holder(far)) == far
