@@ -71,6 +71,8 @@ class Agent:
         self.active_message = ''
         self.accepting = True            # False while the central unit's heartbeat is lost
         self.reject_reason = ''
+        self.failed = ''                 # why the agent gave up (its state machine kept dying), '' if fine
+        self._inject = False             # inject_fault() (test hook)
 
     # -- registration
     def add_task(self, name: str, task_class: type, action: Any, gen_userdata: Callable,
@@ -111,10 +113,55 @@ class Agent:
                 f'{name}_action', spec.action, lambda goal, n=name: self._execute_goal(n, goal))
 
     def _run_sm(self) -> None:
+        """Run the state machine until shutdown. Why a loop: an exception that escapes a state (the idle
+        state's `idle()`, a container bug) ends `execute()`; the thread used to end with it while data_feed
+        still said idle and every goal waited forever (a zombie agent). Now the death is logged, the request
+        in hand is aborted, and a new state machine starts, at most C.SM_MAX_RESTARTS times; after that the
+        agent is marked failed (data_feed says so, goals are refused) instead of pretending to be idle."""
+        restarts = 0
+        while True:
+            try:
+                self.sm.execute()
+                return                                   # ended normally: shutdown
+            except Exception:
+                self.backend.logerr(f'agent state machine died: {traceback.format_exc()}')
+            if self.backend.is_shutdown():
+                return
+            self._abort_requests('the agent state machine died')
+            restarts += 1
+            if restarts > C.SM_MAX_RESTARTS:
+                with self._lock:
+                    self.failed = f'state machine died {restarts} times'
+                self.backend.logerr(f'agent {self.agent_id} FAILED: {self.failed}; refusing goals')
+                return
+            self.backend.logwarn(f'agent state machine restarted ({restarts}/{C.SM_MAX_RESTARTS})')
+            self.sm = AgentStateMachine(self, self.specs)
+
+    def _abort_requests(self, why: str) -> None:
+        """End the pending and running requests (their action clients get an abort) and stop the robot."""
+        with self._lock:
+            reqs = [r for r in (self._pending, self._running) if r is not None]
+            self._pending = self._running = None
+        for req in reqs:
+            self.specs[req.name].task.request_preempt()
+            req.outcome, req.result = C.ERROR, {'message': why}
+            req.done.set()
         try:
-            self.sm.execute()
-        except Exception:
-            self.backend.logerr(f'agent state machine died: {traceback.format_exc()}')
+            self.safe_stop()
+        except Exception as e:  # noqa: BLE001 - logged; the restart goes on
+            self.backend.logerr(f'safe stop after the state machine died failed: {e!r}')
+        self.active_sub_state, self.active_message = '', ''
+
+    def inject_fault(self) -> None:
+        """Test hook (the fault suite, `~fault_injection`): the state machine's next step raises, in the idle
+        state or in the running task."""
+        self._inject = True
+
+    def raise_injected_fault(self) -> None:
+        """Called by the idle state and by tasks at each step: raises once after `inject_fault()`."""
+        if self._inject:
+            self._inject = False
+            raise RuntimeError('fault injected (test)')
 
     def shutdown(self) -> None:
         """Preempt the running task and stop the state machine (Ctrl+C)."""
@@ -134,6 +181,8 @@ class Agent:
         force: the agent's own request (e.g. going home), accepted even while not accepting goals.
         """
         with self._lock:
+            if self.failed:
+                raise RuntimeError(f'agent failed: {self.failed}')
             if not self.accepting and not force:
                 raise RuntimeError(f'not accepting goals: {self.reject_reason}')
             busy = self._running or self._pending

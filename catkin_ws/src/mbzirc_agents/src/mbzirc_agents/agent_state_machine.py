@@ -28,6 +28,7 @@ class DefaultState(smach.State):
                 for k, v in req.userdata.items():
                     ud[k] = v
                 return req.name
+            self.agent.raise_injected_fault()
             self.agent.idle()
         if self.preempt_requested():
             self.service_preempt()

@@ -98,7 +98,8 @@ class AgentTask(smach.State):
         self.agent.publish_feedback(self.name, state, message)
 
     def check_preempt(self) -> None:
-        """Raise TaskPreempted when a preemption was requested."""
+        """Raise TaskPreempted when a preemption was requested (and an injected fault, see inject_fault)."""
+        self.agent.raise_injected_fault()
         if self.preempt_requested():
             raise TaskPreempted()
 

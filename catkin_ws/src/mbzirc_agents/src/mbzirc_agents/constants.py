@@ -68,3 +68,8 @@ COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s
 #                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)
+
+# the agent's state machine is restarted this many times when an exception escapes it, then the agent is failed
+SM_MAX_RESTARTS = 3
+# a first pose above this (m) is in the air: a respawned agent, whose home and regions are not here
+ON_GROUND_MAX_Z = 0.5

@@ -45,6 +45,8 @@ class AgentParams:
     arena: List[float] = _param(list(C.ARENA_BOX), 'x_min, y_min, z_min, x_max, y_max, z_max of the arena: '
                                 'goals outside are refused', lengths=(6,))
     use_regions: bool = _param(True, 'reserve every motion with /ask_for_region')
+    fault_injection: bool = _param(False, 'test only: serve inject_fault (std_srvs/Trigger), after which the '
+                                          "state machine's next step raises (the fault suite)")
     region_margin: float = _param(C.REGION_MARGIN, 'm added around the box reserved for each flight leg')
     region_timeout: float = _param(C.REGION_WAIT_TIMEOUT, 's a motion waits for its region')
     hold_half_size: float = _param(C.HOLD_HALF_SIZE, 'm, half side of the box a hovering UAV holds')

@@ -20,8 +20,9 @@ from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, CheckFire, 
                                   SetObjectStatusRequest)
 from std_msgs.msg import Bool, Float32, Header
 from mbzirc_arena.boxes import check_point
+from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
-from std_srvs.srv import Trigger
+from std_srvs.srv import Trigger, TriggerResponse
 from uav_abstraction_layer.msg import State
 from uav_abstraction_layer.srv import GoToWaypoint, GoToWaypointRequest
 
@@ -60,6 +61,7 @@ class RobotAgent(Agent):
         self.blanket_attached = False
         self.objects: Dict[int, Any] = {}
         self.home: Optional[np.ndarray] = np.array(self.p.home) if self.p.home else None
+        self._started_at_pose = False          # _settle_start done (home, a previous run's regions)
         self.pumping = False
         self.watchdog = hb.HeartbeatWatchdog(self.p.central_unit_timeout,
                                              self.p.return_home_timeout)
@@ -89,18 +91,48 @@ class RobotAgent(Agent):
         self.pump_start_srv = ifc.add_client('actuators_system/start_pump', Trigger)
         self.pump_stop_srv = ifc.add_client('actuators_system/stop_pump', Trigger)
         ifc.add_service_server(None, 'get_cost_to_go_to', GetCostToGoTo, default_callback=self._on_cost)
+        if self.p.fault_injection:       # the fault suite's "exception in a task" (test only)
+            ifc.add_service_server(None, 'inject_fault', Trigger, default_callback=self._on_inject_fault)
         self._last_feed: tuple = (None, -1e9)   # content and ROS time of the last data_feed sent
         self.timer = backend.timer(1.0 / C.DATA_FEED_RATE_HZ, self._on_timer)
 
     def start(self) -> None:
-        """Start the agent; drop regions a previous run of this agent (killed, respawned) left behind."""
+        """Start the agent. The regions a previous run of this agent (killed, respawned) left behind are
+        settled at the first pose (`_settle_start`): dropped when the robot is on the ground, kept when it
+        is in the air (its airspace is still its own: a respawned UAV freed every region it held, mid-air)."""
         super().start()
         self._watchdog_thread = self.backend.start_thread('heartbeat_watchdog', self._watchdog_loop)
-        if self.p.use_regions:
+
+    def _settle_start(self, xyz: np.ndarray) -> None:
+        """At the first pose: choose home and what to do with the regions of a previous run.
+
+        Home is `~home` when given, else this first pose when the robot is on the ground (the normal start),
+        else the arena's home of this robot (known before the trial, mbzirc_arena): a first pose in the air
+        is a respawned agent, never home."""
+        airborne = xyz[2] > C.ON_GROUND_MAX_Z
+        if self.home is None:
+            known = next((h.position for h in ARENA.homes if str(h.robot_id) == str(self.agent_id)), None)
+            if not airborne:
+                self.home = xyz.copy()
+            elif known is not None:
+                self.home = np.array(known, dtype=float)
+                self.backend.logwarn(f'first pose in the air (z {xyz[2]:.1f} m, respawned?): home is the '
+                                     f'arena home {tuple(self.home)}, not here')
+            else:
+                self.backend.logerr(f'first pose in the air (z {xyz[2]:.1f} m) and no ~home nor arena home '
+                                    f'for robot {self.agent_id}: no home until it lands')
+        if not self.p.use_regions:
+            return
+        if airborne:
+            self.backend.logwarn('started in the air (respawned?): keeping the regions a previous run reserved')
+            return
+
+        def free_previous() -> None:
             try:
                 self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, free_all=True))
             except Exception:
                 pass        # no region manager yet: then it holds nothing of ours either
+        self.backend.start_thread('free_previous_regions', free_previous)
 
     # ---- sensing callbacks (always on) ------------------------------------------------------------
     def _on_pose(self, msg: PoseStamped) -> None:
@@ -119,8 +151,10 @@ class RobotAgent(Agent):
             if self.pose_history and stamp < self.pose_history[-1][0]:
                 self.pose_history.clear()           # time went back (bag loop, sim restart)
             self.pose_history.append((stamp, self.pose))
-            if self.home is None:
-                self.home = np.array([p.x, p.y, p.z])
+            first = not self._started_at_pose
+            self._started_at_pose = True
+        if first:
+            self._settle_start(np.array([p.x, p.y, p.z]))
 
     def _doubt_jump(self, xyz: np.ndarray) -> bool:
         """True when this reported position jumped more than ~pose_jump_max from the last accepted one
@@ -178,6 +212,11 @@ class RobotAgent(Agent):
         with self.state_lock:
             self.objects = {int(o.id): o for o in msg.objects}
 
+    def _on_inject_fault(self, _req: Any) -> Any:
+        self.backend.logwarn('fault injection requested: the next step of the state machine raises')
+        self.inject_fault()
+        return TriggerResponse(success=True, message='the next step of the state machine raises')
+
     def _on_heartbeat(self, _msg: Header) -> None:
         self.watchdog.beat(self.wall_clock())
 
@@ -224,8 +263,8 @@ class RobotAgent(Agent):
                 msg.pose = self.pose_msg
         msg.ual_state = self.ual_state
         msg.active_task = self.running_task()
-        msg.active_sub_state = self.active_sub_state
-        msg.is_idle = not msg.active_task
+        msg.active_sub_state = f'FAILED: {self.failed}' if self.failed else self.active_sub_state
+        msg.is_idle = not msg.active_task and not self.failed
         msg.battery = 1.0                    # no battery model in the simulation
         msg.water_level = self.water_level if math.isfinite(self.water_level) else 0.0
         msg.has_blanket = self.blanket_attached

@@ -44,7 +44,7 @@ class FakeUal:
         h['/ask_for_region'] = lambda r: AskForRegionResponse(success=self.regions.ask(
             r.agent_id, r.label, (r.min_corner.point.x, r.min_corner.point.y, r.min_corner.point.z),
             (r.max_corner.point.x, r.max_corner.point.y, r.max_corner.point.z))[0])
-        h['/free_regions'] = lambda r: FreeRegionsResponse(success=self.regions.free(r.agent_id, r.label, r.free_all))
+        h['/free_regions'] = lambda r: FreeRegionsResponse(success=self.regions.free(r.agent_id, r.label, r.free_all)[0])
         self.stop = False
         self.thread = backend.clock.start_thread(self._loop, name='fake UAL')
 

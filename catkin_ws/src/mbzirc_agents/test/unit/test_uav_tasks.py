@@ -232,3 +232,89 @@ def test_gnss_jump_is_doubted_and_the_uav_holds(uav):
     agent._on_pose(nan)
     assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
     assert any('NaN' in e for e in be.errors)
+
+
+def test_exception_in_the_idle_state_restarts_the_state_machine(uav):
+    """A zombie agent: an exception in the idle state ended the state machine's thread while data_feed still
+    said idle, and every later goal waited forever. Now the state machine is restarted and goals are served."""
+    agent, ual, be = uav
+    agent.inject_fault()                                  # the idle state's next step raises
+    deadline = be.clock.now() + 2.0
+    while agent._inject and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
+    assert not agent._inject, 'the idle state never ran its next step'
+    be.clock.sleep(0.3)
+    assert agent._sm_thread.is_alive() and not agent.failed
+    assert take_off(be) == 'succeeded'                    # served, not waiting forever
+
+
+def test_exception_in_a_task_ends_that_task_not_the_agent(uav):
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    be.clock.sleep(0.2)
+    agent.inject_fault()
+    assert s.wait(5) == 'aborted' and 'fault injected' in s.result.message
+    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    assert s.wait(20) == 'succeeded'
+
+
+def test_state_machine_that_keeps_dying_marks_the_agent_failed(uav):
+    agent, ual, be = uav
+    for _ in range(C.SM_MAX_RESTARTS + 1):
+        agent.inject_fault()
+        deadline = be.clock.now() + 2.0
+        while agent._inject and be.clock.now() < deadline:
+            be.clock.sleep(0.05)
+        be.clock.sleep(0.2)
+    deadline = be.clock.now() + 2.0
+    while not agent.failed and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
+    assert agent.failed and not agent._sm_thread.is_alive()
+    feed = agent.data_feed()
+    assert feed.active_sub_state.startswith('FAILED') and not feed.is_idle   # not a silent "idle"
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=3.0))
+    assert s.wait(5) == 'aborted' and 'agent failed' in s.result.message
+
+
+def _respawned_uav(be, z):
+    """A UavAgent '2' started over a FakeUal whose UAV is at height z, with robot 2 holding a region."""
+    from fake_ual import FakeUal
+    from mbzirc_agents.uav_agent import UavAgent
+    ual = FakeUal(be, pos=(7.0, 8.0, z), speedup=8.0)
+    ual.regions.ask('2', 'go_to', (5, 5, 0), (10, 10, 8))           # held by the previous run
+    agent = UavAgent('2', be, {'region_timeout': 5.0})
+    agent.start()
+    deadline = be.clock.now() + 2
+    while agent.pose is None and be.clock.now() < deadline:
+        be.clock.sleep(0.02)
+    be.clock.sleep(0.5)
+    return agent, ual
+
+
+def test_respawned_in_the_air_keeps_its_regions_and_takes_the_arena_home():
+    from mbzirc_arena.c3 import ARENA
+    be = FakeBackend()
+    agent, ual = _respawned_uav(be, 6.0)
+    try:
+        assert ual.regions.owner_at((7, 8, 6)) == '2', 'a respawned UAV freed the airspace it is in'
+        arena_home = next(h.position for h in ARENA.homes if h.robot_id == 2)
+        assert np.allclose(agent.home, arena_home), 'a first pose mid-air is not home'
+    finally:
+        be.shutdown = True
+        ual.stop = True
+        agent.shutdown()
+
+
+def test_started_on_the_ground_frees_a_previous_runs_regions_and_is_home():
+    be = FakeBackend()
+    agent, ual = _respawned_uav(be, 0.0)
+    try:
+        assert ual.regions.owner_at((7, 8, 6)) is None
+        assert np.allclose(agent.home, (7.0, 8.0, 0.0))
+    finally:
+        be.shutdown = True
+        ual.stop = True
+        agent.shutdown()

@@ -24,6 +24,7 @@ from mbzirc_ros_utils.periodic import PeriodicTimer
 from std_msgs.msg import Header, String
 
 from . import constants as C
+from .goal_timeouts import GoalClock
 from .layout import Layout, load_world
 from .strategy import Command, Strategy, StrategyParams
 from .world_model import AgentView, FireView, WorldView, fire_kind
@@ -113,6 +114,7 @@ class CentralUnit:
         self.feedback: dict[str, str] = {}
         self.silent: set[str] = set()
         self.freed: set[str] = set()  # crashed agents whose reserved regions were freed
+        self.goal_clock = GoalClock(float(rospy.get_param("~task_timeout_scale", 1.0)))   # goal_timeouts.py
         self.heartbeat_pub = rospy.Publisher("/central_unit/heartbeat", Header, queue_size=1)
         self.status_pub = rospy.Publisher("/central_unit/status", String, queue_size=1, latch=True)
         self.subs = [rospy.Subscriber(f"/{C.robot_ns(i)}/data_feed", cmsg.AgentDataFeed, self._on_feed,
@@ -193,9 +195,12 @@ class CentralUnit:
     # ---- outputs ---------------------------------------------------------------------------------
     def _heartbeat(self) -> None:
         now = rospy.get_time()
-        if self._last_hb <= now < self._last_hb + self.hb_period - 1e-3:
+        if self._last_hb <= now < self._last_hb + self.hb_period:
             return                 # ticks faster than ~heartbeat_rate: not every tick
-        self._last_hb = now
+        # the next one is due a period after this one was due (not after now): ~heartbeat_rate on average
+        # whatever the tick's phase; a late or time-jumped tick restarts the schedule
+        due = self._last_hb + self.hb_period
+        self._last_hb = due if 0.0 <= now - due < self.hb_period else now
         self.seq += 1
         h = Header(seq=self.seq, stamp=rospy.Time.now(), frame_id=self.run_id)
         self.heartbeat_pub.publish(h)
@@ -223,6 +228,7 @@ class CentralUnit:
             self.feedback[agent_id] = getattr(fb, "message", "") or getattr(fb, "state", "")
 
         client.send_goal(goal, done_cb=done, feedback_cb=feedback)
+        self.goal_clock.started(cmd, rospy.get_time())
         rospy.loginfo(f"central_unit: {cmd.agent_id} <- {cmd.describe()}")
 
     def _free_regions_of(self, agent_id: str) -> None:
@@ -265,6 +271,12 @@ class CentralUnit:
             level = rospy.loginfo if ok else rospy.logwarn
             level(f"central_unit: {cmd.agent_id} {cmd.task} -> {GoalStatus.to_string(status)} "
                   f"{res.get('message', '')}")
+        for cmd, waited in self.goal_clock.overdue(self.strategy.in_flight, now):
+            # no result in the task's bound (goal_timeouts.py): a zombie agent, a lost result, a stuck call
+            rospy.logwarn(f"central_unit: {cmd.agent_id} {cmd.task} gave no result in {waited:.0f} s: "
+                          "cancelled, counted as a failure")
+            self._client(cmd.agent_id, cmd.task).cancel_goal()
+            self.strategy.on_result(cmd, False, {"message": f"timed out after {waited:.0f} s"})
         for agent_id in self.agent_ids:
             a = world.agents.get(agent_id)
             alive = a is not None and a.alive(now, self.strategy.p.agent_timeout)
