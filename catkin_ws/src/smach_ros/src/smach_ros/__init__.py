@@ -12,6 +12,7 @@ from smach_ros.monitor_state import MonitorState, ConditionState  # noqa: E402,F
 from smach_ros.action_server_wrapper import ActionServerWrapper  # noqa: E402,F401
 from smach_ros.introspection import IntrospectionServer, IntrospectionClient  # noqa: E402,F401
 from smach_ros.util import set_preempt_handler  # noqa: E402,F401
+from smach_ros.debugger import breakpoint_here  # noqa: E402,F401
 
 __all__ = ["SimpleActionState", "ServiceState", "MonitorState", "ConditionState", "ActionServerWrapper",
-           "IntrospectionServer", "IntrospectionClient", "set_preempt_handler"]
+           "IntrospectionServer", "IntrospectionClient", "set_preempt_handler", "breakpoint_here"]
