@@ -15,6 +15,7 @@ import rostest
 
 from mbzirc_robustness.fuzz_runner import GraphFuzzer
 from mbzirc_robustness.graph import query_pid
+from mbzirc_robustness.probes import parse_probes
 from mbzirc_robustness.report import format_fuzz_summary, write_json
 
 
@@ -40,7 +41,9 @@ class TestFuzzProjectNodes(unittest.TestCase):
                              seed=int(rospy.get_param("~seed", 0)),
                              exclude_nodes=rospy.get_param("~exclude_nodes", ["/rosout"]),
                              exclude_topics=rospy.get_param("~exclude_topics", ["/clock", "/rosout", "/rosout_agg"]),
-                             exclude_cases=rospy.get_param("~exclude_cases", []))
+                             exclude_cases=rospy.get_param("~exclude_cases", []),
+                             probes=parse_probes(rospy.get_param("~probes", [])),
+                             fuzz_clock=bool(rospy.get_param("~fuzz_clock", False)))
         cls.data = fuzzer.run().to_dict()
         print(format_fuzz_summary(cls.data), flush=True)
         path = rospy.get_param("~report_path", "") or os.path.join(
@@ -56,6 +59,16 @@ class TestFuzzProjectNodes(unittest.TestCase):
     def test_no_node_died(self):
         died = self.data["summary"]["nodes_died"]
         self.assertEqual(died, [], "nodes that died, with the input being sent: %s" % died)
+
+    def test_every_probed_node_kept_its_function(self):
+        """Alive is not enough: after each batch the node still turns a valid input into a valid output."""
+        lost = self.data["summary"]["function_lost"]
+        self.assertEqual(lost, [], "nodes alive but no longer doing their job: %s" % lost)
+        probed = [p["node"] for p in rospy.get_param("~probes", [])]
+        unusable = [s for s in self.data["skipped"] if s["name"].startswith("probe ")]
+        self.assertEqual(unusable, [], "probes that failed before any fuzzing (wrong probe?)")
+        for n in probed:
+            self.assertGreater(self.data["nodes"][n].get("functional_checks", 0), 0, f"{n} never probed")
 
     def test_every_node_logged_a_clear_error(self):
         silent = self.data["summary"]["silent_nodes"]

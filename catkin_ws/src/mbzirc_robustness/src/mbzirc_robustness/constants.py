@@ -9,6 +9,7 @@ ODD_LENGTHS = (1, 1023, 1025)   # array lengths that break "exactly N values" as
 MANY_ELEMENTS = 200             # sub-messages in the "many elements" case
 TEMPLATE_FRAME = "arena"        # header.frame_id of the template every mutation starts from
 TEMPLATE_STRING = "1"           # other strings of the template (a plausible robot id)
+SINGLE_FIELD_FLOATS = 8         # float fields that get a NaN / +inf of their own (the rest of the message valid)
 MAX_DEPTH = 6                   # recursion limit when populating nested messages
 
 # ---- fuzz runner ------------------------------------------------------------------------------------
@@ -22,6 +23,9 @@ XMLRPC_TIMEOUT_S = 3.0          # getPid on a node
 DEFAULT_EXCLUDE_TOPICS = ("/clock", "/rosout", "/rosout_agg")
 DEFAULT_EXCLUDE_SERVICES = ("*/get_loggers", "*/set_logger_level")
 DEFAULT_EXCLUDE_NODES = ("/rosout",)
+FLOOD_COUNT = 500               # valid messages sent at once to each topic (stress)
+GOAL_STORM = 50                 # valid goals with distinct ids sent at once to each action goal topic
+PREEMPT_RACES = 5               # goal + its cancel sent back to back
 DISCOVERY_PASSES = 2            # nodes subscribe lazily (e.g. a tf listener made on first use): look again
 ERROR_LEVELS = (8, 16)          # rosgraph_msgs/Log ERROR, FATAL
 WARN_LEVEL = 4

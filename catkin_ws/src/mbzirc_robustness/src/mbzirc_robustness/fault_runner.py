@@ -182,6 +182,8 @@ class FaultSuite:
         self.log: list[str] = []
         self.lab: Optional[NetnsLab] = None
         self.cut_robots: set[str] = set()
+        self.recovering: set[str] = set()          # nodes killed whose recovery is being watched
+        self.kill_walls: dict[str, float] = {}     # node -> monotonic time of its kill -9
 
     def say(self, text: str) -> None:
         """One line of progress, wall-clock stamped (printed and kept for the report)."""
@@ -277,6 +279,15 @@ class FaultSuite:
         inputs_before = self._bus_inputs(f.target) if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS) else set()
         self.say(f"kill -9 {f.target} (pid {pid})" + (f", {tracks_before} tracks" if f.check == F.CHECK_TRACKS else ""))
         t_kill = time.monotonic()
+        self.recovering.add(f.target)
+        self.kill_walls[f.target] = t_kill
+        try:
+            self._crash_watch(f, mon, pid, t_kill, tracks_before, objects_before, inputs_before)
+        finally:
+            self.recovering.discard(f.target)
+
+    def _crash_watch(self, f: F.Fault, mon: Monitor, pid: int, t_kill: float, tracks_before: int,
+                     objects_before: dict, inputs_before: set) -> None:
         regions_before = mon.regions_before(t_kill) if f.check == F.CHECK_REGIONS else None
         f.result["t_kill"] = mon.sim_time()
         try:
@@ -371,10 +382,30 @@ class FaultSuite:
             hist = list(mon.history)
         return F.judge_decisions(hist, t_kill, mon.sim_time())
 
+    # the node behind each periodic output (an output whose node is being killed is that fault's to judge)
+    @staticmethod
+    def _producer(output: str) -> str:
+        if output.startswith("/central_unit/"):
+            return "/central_unit"
+        if output == "/estimated_objects":
+            return "/object_estimator"
+        return output.rsplit("/", 1)[0] + "/agent"          # /mbzirc2020_<r>/data_feed
+
     def _expected_outputs(self, mon: Monitor, t_fault: float) -> list[str]:
-        """The periodic outputs flowing in the 5 s before a fault, minus those of robots whose link is cut."""
+        """The periodic outputs flowing in the 5 s before a fault, minus those of robots whose link is cut
+        and those whose node is down for a kill -9 being judged meanwhile."""
         cut = {f"/mbzirc2020_{r}/data_feed" for r in self.cut_robots}
-        return [o for o in mon.flowing(t_fault - 5.0) if o not in cut]
+        return [o for o in mon.flowing(t_fault - 5.0) if o not in cut and self._producer(o) not in self.recovering]
+
+    def _judge_outputs(self, mon: Monitor, expected: list[str], since: float) -> dict[str, Any]:
+        """judge_outputs, leaving out outputs whose node was killed meanwhile (judged by that fault)."""
+        still = [o for o in expected if self._producer(o) not in self.recovering | self.killed_since(since)]
+        v = F.judge_outputs(dict(mon.last_seen), since, still)
+        v["expected_outputs"] = still
+        return v
+
+    def killed_since(self, wall: float) -> set[str]:
+        return {node for node, t in self.kill_walls.items() if t >= wall}
 
     def _clock_fault(self, f: F.Fault, mon: Monitor) -> None:
         """One /clock message ``jump_s`` back (KIND_CLOCK_JUMP), or /clock counting again from 0 for 1 s
@@ -395,8 +426,7 @@ class FaultSuite:
                 mon.clock_pub.publish(Clock(clock=rospy.Time.from_sec(0.05 * k)))
                 time.sleep(0.05)
         time.sleep(min(self.cfg.recover_wall_s, 20.0))
-        v = F.judge_outputs(dict(mon.last_seen), time.monotonic() - 10.0, expected)
-        v["expected_outputs"] = expected
+        v = self._judge_outputs(mon, expected, time.monotonic() - 10.0)
         f.result.update({"survived": v["ok"], "detail": v["detail"], "outputs_check": v})
         self.say(f"{f.kind}: {v['detail']}")
 
@@ -418,7 +448,7 @@ class FaultSuite:
         sent, nxt = 0, start
         self.say(f"flooding {topic} at {f.rate_hz or 1000.0:.0f} Hz for {f.duration_s or 10.0:.0f} s")
         while time.monotonic() < end:
-            d = ObjectDetection(type=1)
+            d = ObjectDetection(type=ObjectDetection.TYPE_FIRE)
             d.header.frame_id = "arena"
             d.pose.pose.position.x = rng.uniform(1000.0, 3000.0)
             d.pose.pose.position.y = rng.uniform(1000.0, 3000.0)
@@ -432,7 +462,7 @@ class FaultSuite:
         took = time.monotonic() - start
         gaps = mon.objects_gaps(start, time.monotonic())
         time.sleep(10.0)
-        after = F.judge_outputs(dict(mon.last_seen), time.monotonic() - 8.0, expected)
+        after = self._judge_outputs(mon, expected, time.monotonic() - 8.0)
         v = F.judge_flood(gaps, outputs_after=after)
         v.update(sent=sent, achieved_rate_hz=round(sent / max(took, 1e-6)))
         f.result.update({"survived": v["ok"], "detail": v["detail"] + f" ({sent} messages, "

@@ -373,6 +373,27 @@ def global_mutations(msg: genpy.Message) -> list[Mutation]:
     ]
 
 
+def single_field_mutations(msg: genpy.Message) -> list[Mutation]:
+    """One non-finite value in one float field, the rest valid: the case a node's whole-message checks miss
+    (e.g. a pose whose x alone is NaN). Up to C.SINGLE_FIELD_FLOATS fields, alternating NaN and +inf; in an
+    array only the first element is changed."""
+    out: list[Mutation] = []
+    floats = [lf for lf in leaves(msg) if lf.base in FLOAT_VALUES]
+    for k, lf in enumerate(floats[: C.SINGLE_FIELD_FLOATS]):
+        value, label = (math.nan, "NaN") if k % 2 == 0 else (math.inf, "+inf")
+        name, p = path_str(lf.path), lf.path
+
+        def apply(m: genpy.Message, p=p, value=value, lf=lf) -> None:
+            if lf.is_array:
+                arr = list(get_path(m, p)) or [0.0]
+                arr[0] = value
+                set_path(m, p, arr)
+            else:
+                set_path(m, p, value)
+        out.append((f"only {name}{'[0]' if lf.is_array else ''}={label}", apply))
+    return out
+
+
 def raw_cases(cls: type, rng: random.Random) -> list[FuzzCase]:
     """Byte-level garbage with the right md5: random bytes, truncated and padded valid messages."""
     valid = serialize(populated(cls))
@@ -406,7 +427,10 @@ def generate_cases(cls: type, max_cases: int = C.DEFAULT_MAX_CASES, seed: int = 
     priority: list[Mutation] = []
     for path, sub in submessages(base):
         priority += semantic_mutations(path, sub)
-    priority += global_mutations(base)
+    # whole-message and single-field non-finite values take turns, so that even a small budget sends both
+    whole, single = global_mutations(base), single_field_mutations(base)
+    for k in range(max(len(whole), len(single))):
+        priority += whole[k:k + 1] + single[k:k + 1]
     leaf_list = list(leaves(base))
     rng.shuffle(leaf_list)
     leaf_list.sort(key=lambda lf: len(lf.path))  # stable: top-level fields (ids, names) first

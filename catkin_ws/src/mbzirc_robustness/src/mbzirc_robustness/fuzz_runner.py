@@ -22,7 +22,8 @@ from rosgraph_msgs.msg import Log
 
 from mbzirc_robustness import constants as C
 from mbzirc_robustness import graph as G
-from mbzirc_robustness.fuzz import FuzzCase, generate_cases, message_class
+from mbzirc_robustness.fuzz import FuzzCase, generate_cases, message_class, populated, serialize
+from mbzirc_robustness.probes import Probe, ProbeRunner
 from mbzirc_robustness.report import FuzzReport
 
 
@@ -95,13 +96,21 @@ class GraphFuzzer:
         call_timeout: a service call that takes longer is reported as hung.
         exclude_cases: ``"<input>: <case label>"`` patterns never sent (a known fatal input of a library,
             so that the rest of that input is still fuzzed).
+        probes: functional checks (probes.Probe) run before fuzzing (a probe that fails then is reported
+            and not used) and after each fuzzed input on the nodes behind it: the node must still turn a
+            valid input into a valid output, not only answer getPid.
+        stress: after the malformed cases of a topic, valid but abusive traffic: a flood (C.FLOOD_COUNT
+            valid messages at once), on action goal topics a goal storm and goal/cancel races, on action
+            result topics spoofed results (valid results of goals nobody sent).
+        fuzz_clock: at the end, one /clock message 10 s in the past, then every probe again.
     """
 
     def __init__(self, target_nodes: list[str] | None = None, max_cases: int = C.DEFAULT_MAX_CASES,
                  rate_hz: float = C.DEFAULT_RATE_HZ, seed: int = 0,
                  exclude_nodes: list[str] | None = None, exclude_topics: list[str] | None = None,
                  exclude_services: list[str] | None = None,
-                 call_timeout: float = C.SERVICE_CALL_TIMEOUT_S, exclude_cases: list[str] | None = None) -> None:
+                 call_timeout: float = C.SERVICE_CALL_TIMEOUT_S, exclude_cases: list[str] | None = None,
+                 probes: list[Probe] | None = None, stress: bool = True, fuzz_clock: bool = False) -> None:
         self.target_nodes = list(target_nodes or [])
         self.max_cases = max_cases
         self.period = 1.0 / max(rate_hz, 0.1)
@@ -112,6 +121,10 @@ class GraphFuzzer:
                                      else C.DEFAULT_EXCLUDE_SERVICES)
         self.call_timeout = call_timeout
         self.exclude_cases = list(exclude_cases or [])
+        self.probes = list(probes or [])
+        self.stress = stress
+        self.fuzz_clock = fuzz_clock
+        self.prober: ProbeRunner | None = None
         self.me = rospy.get_name()
         self.master = rosgraph.Master(self.me)
         self.my_uri = rospy.get_node_uri() or ""
@@ -133,6 +146,7 @@ class GraphFuzzer:
         sink = _LogSink(set(nodes))
         sub = rospy.Subscriber("/rosout", Log, sink, queue_size=500)
         time.sleep(0.5)  # let /rosout publishers connect to us
+        self._baseline(report)
         done: set[tuple[str, str]] = set()
         try:
             for _ in range(C.DISCOVERY_PASSES):
@@ -143,7 +157,10 @@ class GraphFuzzer:
                 for tg in todo:
                     done.add((tg.kind, tg.name))
                     self._fuzz_one(tg, report, sink)
+                    self._probe(tg.nodes, report, tg.name)
                 targets = self.targets()  # inputs created while we fuzzed (lazy subscribers)
+            if self.fuzz_clock and not rospy.is_shutdown():
+                self._clock_jump(report, nodes)
             time.sleep(C.SETTLE_S)
             for n in nodes:
                 if report.nodes[n]["alive"]:
@@ -172,6 +189,109 @@ class GraphFuzzer:
             self._fuzz_service(tg, report)
         else:
             self._fuzz_topic(tg, report)
+
+    # ---- function ------------------------------------------------------------------------------------
+    def _baseline(self, report: FuzzReport) -> None:
+        """Run every probe once before fuzzing; keep those that pass (a probe that fails on a fresh node
+        is a wrong probe, not a finding), report the others."""
+        if not self.probes:
+            return
+        self.prober = ProbeRunner(self.probes)
+        time.sleep(1.0)                                   # let the probe publishers / subscribers connect
+        good = []
+        for p in self.probes:
+            ok, why = False, ''
+            for _ in range(3):
+                ok, why = self.prober.run(p)
+                if ok:
+                    break
+            if ok:
+                good.append(p)
+            else:
+                report.add_skipped(f"probe {p.node}: {p.describe()}", f"fails before any fuzzing: {why}")
+        self.prober.probes = good
+
+    def _probe(self, nodes: list[str], report: FuzzReport, during: str) -> None:
+        """After an input was fuzzed: every probe of the (still alive) nodes behind it."""
+        if self.prober is None:
+            return
+        for n in nodes:
+            if n not in report.nodes or not report.nodes[n]["alive"]:
+                continue
+            for p in self.prober.for_node(n):
+                ok, why = self.prober.run(p)
+                if not ok:                                # one more chance: a busy node may be late once
+                    ok, why = self.prober.run(p)
+                report.add_function_check(n, during, p.describe(), ok, why)
+
+    def _clock_jump(self, report: FuzzReport, nodes: list[str]) -> None:
+        """One /clock message 10 s in the past (a simulator restart, a bag with --clock), then every probe."""
+        from rosgraph_msgs.msg import Clock
+        pub = _PUBLISHERS.get("/clock")
+        if pub is None:
+            pub = rospy.Publisher("/clock", raw_message_class(Clock), queue_size=10)
+            _PUBLISHERS["/clock"] = pub
+        time.sleep(C.CONNECT_TIMEOUT_S)
+        now = rospy.get_time()
+        pub.publish(pub.data_class(serialize(Clock(clock=rospy.Time.from_sec(max(now - 10.0, 0.001))))))
+        time.sleep(1.0)
+        report.add_input(G.KIND_TOPIC, "/clock", "rosgraph_msgs/Clock", nodes, 1,
+                         labels=["clock: one message 10 s in the past"])
+        self._probe(nodes, report, "/clock: one message 10 s in the past")
+
+    def _stress_cases(self, tg: G.Target, cls: type) -> list[tuple[str, str, list[bytes]]]:
+        """(label, topic, payloads) of valid but abusive traffic for one topic (see ``stress``)."""
+        out: list[tuple[str, str, list[bytes]]] = []
+        try:
+            template = populated(cls)
+            out.append((f"flood: {C.FLOOD_COUNT} valid messages at once", tg.name,
+                        [serialize(template)] * C.FLOOD_COUNT))
+        except Exception:  # noqa: BLE001 - a type we cannot populate gets no stress cases
+            return out
+        if tg.kind == G.KIND_ACTION_GOAL and hasattr(template, "goal_id"):
+            storm = []
+            for k in range(C.GOAL_STORM):
+                template.goal_id.id = f"storm-{k}"
+                storm.append(serialize(template))
+            out.append((f"goal storm: {C.GOAL_STORM} goals at once", tg.name, storm))
+            from actionlib_msgs.msg import GoalID
+            cancel = tg.name[: -len("/goal")] + "/cancel"
+            for k in range(C.PREEMPT_RACES):
+                template.goal_id.id = f"race-{k}"
+                out.append((f"preempt race {k}: goal then its cancel at once", "", [serialize(template)]))
+                out.append((f"preempt race {k}: cancel", cancel, [serialize(GoalID(id=f"race-{k}"))]))
+        if tg.name.endswith("/result") and hasattr(template, "status"):
+            spoofs = []
+            for k in range(5):
+                template.status.goal_id.id = f"spoofed-{k}"
+                template.status.status = 3            # SUCCEEDED, of a goal nobody sent
+                spoofs.append(serialize(template))
+            out.append(("spoofed results: 5 valid results of goals never sent", tg.name, spoofs))
+        return out
+
+    def _send_stress(self, tg: G.Target, cls: type, pub: rospy.Publisher) -> tuple[int, list[str]]:
+        """Send the stress cases of a topic; returns (messages sent, labels)."""
+        sent, labels = 0, []
+        for label, topic, payloads in self._stress_cases(tg, cls):
+            if rospy.is_shutdown():
+                break
+            target = pub if topic in ("", tg.name) else self._raw_publisher(topic, "actionlib_msgs/GoalID")
+            for payload in payloads:
+                target.publish(target.data_class(payload))
+                sent += 1
+            labels.append(label)
+            if not label.startswith("preempt race"):
+                time.sleep(C.SETTLE_S)
+            self._check(tg, report_ref(self), label)
+        return sent, labels
+
+    def _raw_publisher(self, topic: str, type_name: str) -> rospy.Publisher:
+        pub = _PUBLISHERS.get(topic)
+        if pub is None:
+            pub = rospy.Publisher(topic, raw_message_class(message_class(type_name)), queue_size=C.DEFAULT_MAX_CASES)
+            _PUBLISHERS[topic] = pub
+            time.sleep(0.5)
+        return pub
 
     # -----------------------------------------------------------------------------------------------
     def _check(self, tg: G.Target, report: FuzzReport, label: str) -> None:
@@ -224,8 +344,13 @@ class GraphFuzzer:
                 self._check(tg, report, _window_label(cases, sent))
         time.sleep(C.SETTLE_S)
         self._check(tg, report, _window_label(cases, sent) + " (found after the last case)")
-        report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected,
-                         labels=[c.label for c in cases])
+        labels = [c.label for c in cases]
+        if self.stress and not rospy.is_shutdown() and any(report.nodes[n]["alive"] for n in tg.nodes):
+            self._report = report
+            n_stress, stress_labels = self._send_stress(tg, cls, pub)
+            sent += n_stress
+            labels += stress_labels
+        report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected, labels=labels)
 
     def _fuzz_service(self, tg: G.Target, report: FuzzReport) -> None:
         try:
@@ -266,6 +391,11 @@ class GraphFuzzer:
         th.start()
         th.join(self.call_timeout)
         return result[0] if result else "timeout"
+
+
+def report_ref(fuzzer: GraphFuzzer) -> FuzzReport:
+    """The report being filled (set by ``_fuzz_topic`` before the stress cases)."""
+    return fuzzer._report
 
 
 def _window_label(cases: list[FuzzCase], sent: int) -> str:

@@ -41,6 +41,23 @@ class FuzzReport:
             node["died_on"] = during
             node["restarted"] = pid is not None
 
+    def add_function_check(self, name: str, during: str, what: str, ok: bool, detail: str) -> None:
+        """A functional probe of node ``name`` after input ``during``: failed = the node lost its function."""
+        node = self.nodes.get(name)
+        if node is None:
+            return
+        node["functional_checks"] = node.get("functional_checks", 0) + 1
+        node.setdefault("probe", what)
+        if not ok:
+            node["functional_failures"] = node.get("functional_failures", 0) + 1
+            if not node.get("function_lost"):
+                node["function_lost"] = f"after {during}: {what}: {detail}"
+
+    def function_lost(self) -> list[dict[str, Any]]:
+        """Nodes alive but no longer doing their job after some input."""
+        return [{"node": n, "function_lost": v["function_lost"]} for n, v in sorted(self.nodes.items())
+                if v.get("function_lost")]
+
     def add_input(self, kind: str, name: str, type_name: str, nodes: list[str], sent: int,
                   connected: list[str] | None = None, outcomes: list[tuple[str, str]] | None = None,
                   labels: list[str] | None = None) -> None:
@@ -111,7 +128,9 @@ class FuzzReport:
         return {"summary": {"nodes": len(self.nodes), "inputs_fuzzed": kinds,
                             "malformed_inputs_tried": self.inputs_tried(), "nodes_died": self.died(),
                             "silent_nodes": self.silent(), "silent_inputs": self.silent_inputs(),
-                            "all_survived": not self.died() and bool(self.nodes)},
+                            "function_lost": self.function_lost(),
+                            "functional_checks": sum(v.get("functional_checks", 0) for v in self.nodes.values()),
+                            "all_survived": not self.died() and not self.function_lost() and bool(self.nodes)},
                 "nodes": self.nodes, "inputs": self.inputs, "skipped": self.skipped}
 
 
@@ -120,7 +139,8 @@ def merge_fuzz_reports(reports: list[dict[str, Any]]) -> dict[str, Any] | None:
     if not reports:
         return None
     s: dict[str, Any] = {"nodes": 0, "inputs_fuzzed": {}, "malformed_inputs_tried": 0, "nodes_died": [],
-                         "silent_nodes": [], "silent_inputs": [], "all_survived": True}
+                         "silent_nodes": [], "silent_inputs": [], "function_lost": [], "functional_checks": 0,
+                         "all_survived": True}
     nodes: dict[str, Any] = {}
     inputs: list[dict[str, Any]] = []
     for r in reports:
@@ -129,8 +149,9 @@ def merge_fuzz_reports(reports: list[dict[str, Any]]) -> dict[str, Any] | None:
         for k, v in rs["inputs_fuzzed"].items():
             s["inputs_fuzzed"][k] = s["inputs_fuzzed"].get(k, 0) + v
         s["malformed_inputs_tried"] += rs["malformed_inputs_tried"]
-        for key in ("nodes_died", "silent_nodes", "silent_inputs"):
-            s[key] += rs[key]
+        for key in ("nodes_died", "silent_nodes", "silent_inputs", "function_lost"):
+            s[key] += rs.get(key, [])
+        s["functional_checks"] += rs.get("functional_checks", 0)
         s["all_survived"] = s["all_survived"] and rs["all_survived"]
         nodes.update(r.get("nodes", {}))
         inputs += r.get("inputs", [])
@@ -150,12 +171,16 @@ def format_fuzz_summary(data: dict[str, Any]) -> str:
     lines = [f"fuzzed {s['nodes']} nodes: {s['inputs_fuzzed']}, {s['malformed_inputs_tried']} malformed inputs"]
     for d in s["nodes_died"]:
         lines.append(f"  DIED  {d['node']} on {d['died_on']}" + (" (respawned)" if d["restarted"] else ""))
+    for d in s.get("function_lost", []):
+        lines.append(f"  LOST FUNCTION {d['node']}: {d['function_lost']}")
     for n in s["silent_nodes"]:
         lines.append(f"  SILENT {n}: no error logged for any malformed input")
     for n, v in sorted(data["nodes"].items()):
         if v["alive"]:
             sample = v["sample_errors"][0] if v["sample_errors"] else "-"
-            lines.append(f"  ok    {n}: {v['errors_logged']} errors logged, e.g. {sample!r}")
+            probe = (f", probe '{v['probe']}' passed {v.get('functional_checks', 0) - v.get('functional_failures', 0)}"
+                     f"/{v.get('functional_checks', 0)}") if v.get("probe") else ", no functional probe"
+            lines.append(f"  ok    {n}: {v['errors_logged']} errors logged{probe}, e.g. {sample!r}")
     return "\n".join(lines)
 
 
@@ -183,6 +208,7 @@ def robustness_report(fuzz: dict[str, Any] | None, scenarios: list[dict[str, Any
                             if s.get("recovery_wall_s") is not None},
         "malformed_inputs_tried": fuzz["summary"]["malformed_inputs_tried"] if fuzz else 0,
         "fuzz_nodes_died": [d["node"] for d in fuzz["summary"]["nodes_died"]] if fuzz else [],
+        "fuzz_function_lost": [d["node"] for d in fuzz["summary"].get("function_lost", [])] if fuzz else [],
         "fuzz_silent_nodes": fuzz["summary"]["silent_nodes"] if fuzz else [],
         "robots_lost": robots_lost, "fires_put_out": None, "fires_total": None, "collisions": None,
         "scenarios": scenarios,

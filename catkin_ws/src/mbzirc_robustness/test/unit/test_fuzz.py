@@ -135,3 +135,29 @@ def test_path_helpers():
     assert fuzz.path_str(()) == "<msg>"
     with pytest.raises(ValueError):
         fuzz.message_class("no_pkg/NoMsg")
+
+
+def test_single_field_nan_and_inf_within_a_small_budget():
+    """A NaN in one field only (the rest valid) is sent even with the rostests' small case budgets."""
+    cases = [c for c in fuzz.generate_cases(PoseStamped, max_cases=16) if c.label.startswith("only ")]
+    assert len(cases) >= 2, [c.label for c in fuzz.generate_cases(PoseStamped, max_cases=16)]
+    for c in cases:
+        values = _floats(decode(PoseStamped, c))
+        bad = [v for v in values if not math.isfinite(v)]
+        assert len(bad) == 1, (c.label, values)
+    assert any("NaN" in c.label for c in cases) and any("+inf" in c.label for c in cases)
+
+
+def test_fuzz_report_fails_a_node_that_lost_its_function():
+    from mbzirc_robustness.report import FuzzReport, merge_fuzz_reports
+    rep = FuzzReport()
+    rep.add_node("/est", 10)
+    rep.add_function_check("/est", "/a", "/estimated_objects published", True, "ok")
+    assert rep.to_dict()["summary"]["all_survived"]
+    rep.add_function_check("/est", "/clock: one message 10 s in the past", "/estimated_objects published", False,
+                           "/estimated_objects not published within 3.0 s")
+    s = rep.to_dict()["summary"]
+    assert not s["all_survived"] and s["functional_checks"] == 2, "alive (same pid) but silent is a failure"
+    assert "clock" in s["function_lost"][0]["function_lost"]
+    m = merge_fuzz_reports([rep.to_dict()])
+    assert not m["summary"]["all_survived"] and m["summary"]["function_lost"]
