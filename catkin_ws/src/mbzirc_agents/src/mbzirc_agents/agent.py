@@ -72,6 +72,7 @@ class Agent:
         self.accepting = True            # False while the central unit's heartbeat is lost
         self.reject_reason = ''
         self.failed = ''                 # why the agent gave up (its state machine kept dying), '' if fine
+        self.sm_beat: Optional[float] = None   # wall time the state machine last showed it runs (note_sm_alive)
         self._inject = False             # inject_fault() (test hook)
 
     # -- registration
@@ -151,6 +152,15 @@ class Agent:
         except Exception as e:  # noqa: BLE001 - logged; the restart goes on
             self.backend.logerr(f'safe stop after the state machine died failed: {e!r}')
         self.active_sub_state, self.active_message = '', ''
+
+    def note_sm_alive(self) -> None:
+        """The state machine's loops call this (idle state, task preempt checks, feedback): the agent's
+        liveness (its data_feed) comes from the loop that does the work, not from a timer beside it."""
+        self.sm_beat = self.backend.wall_time()
+
+    def sm_silent_for(self) -> float:
+        """Wall seconds since the state machine last showed it runs (0 before it first ran)."""
+        return 0.0 if self.sm_beat is None else max(self.backend.wall_time() - self.sm_beat, 0.0)
 
     def inject_fault(self) -> None:
         """Test hook (the fault suite, `~fault_injection`): the state machine's next step raises, in the idle
@@ -287,6 +297,7 @@ class Agent:
 
     def publish_feedback(self, task_name: str, state: str, message: str) -> None:
         """Feedback of the active task to its action client, data_feed and the log."""
+        self.note_sm_alive()
         self.active_sub_state, self.active_message = state, message
         with self._lock:
             req = self._running

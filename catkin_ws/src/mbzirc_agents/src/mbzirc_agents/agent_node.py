@@ -27,6 +27,7 @@ def main(agent_class: type, node_name: str) -> None:
     agent_id = str(params.get('uav_id', AgentParams().uav_id))
     ns = rospy.get_namespace().rstrip('/') or f'/mbzirc2020_{agent_id}'
     agent = agent_class(agent_id, RosBackend(), params, ns)
+    agent.set_mission(str(rospy.get_param('/run_id', '') or ''))
     agent.start()
     sis = None
     try:

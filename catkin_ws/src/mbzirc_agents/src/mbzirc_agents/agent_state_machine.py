@@ -28,6 +28,7 @@ class DefaultState(smach.State):
                 for k, v in req.userdata.items():
                     ud[k] = v
                 return req.name
+            self.agent.note_sm_alive()
             self.agent.raise_injected_fault()
             self.agent.idle()
         if self.preempt_requested():

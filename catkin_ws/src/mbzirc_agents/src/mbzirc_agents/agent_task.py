@@ -99,6 +99,7 @@ class AgentTask(smach.State):
 
     def check_preempt(self) -> None:
         """Raise TaskPreempted when a preemption was requested (and an injected fault, see inject_fault)."""
+        self.agent.note_sm_alive()
         self.agent.raise_injected_fault()
         if self.preempt_requested():
             raise TaskPreempted()

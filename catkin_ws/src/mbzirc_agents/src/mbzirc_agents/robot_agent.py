@@ -21,6 +21,7 @@ from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, CheckFire, 
 from std_msgs.msg import Bool, Float32, Header
 from mbzirc_arena.boxes import check_point
 from mbzirc_arena.c3 import ARENA
+from mbzirc_ros_utils.liveness import HeartbeatFilter
 from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
 from std_srvs.srv import Trigger, TriggerResponse
 from uav_abstraction_layer.msg import State
@@ -67,6 +68,7 @@ class RobotAgent(Agent):
                                              self.p.return_home_timeout)
         self._went_home = False
         self._home_request = None
+        self.hb_filter = HeartbeatFilter()     # replayed heartbeats are not believed (mbzirc_ros_utils.liveness)
         # Why wall time: /clock comes from the simulator on the ground station; when the link is cut the
         # robot's ROS time stops too, so a ROS-time watchdog would never fire.
         self.wall_clock = backend.wall_time
@@ -217,7 +219,16 @@ class RobotAgent(Agent):
         self.inject_fault()
         return TriggerResponse(success=True, message='the next step of the state machine raises')
 
-    def _on_heartbeat(self, _msg: Header) -> None:
+    def set_mission(self, mission: str) -> None:
+        """This mission's id (the master's /run_id): heartbeats of another mission are refused."""
+        self.hb_filter.mission = mission
+
+    def _on_heartbeat(self, msg: Header) -> None:
+        if msg is not None:
+            ok, why = self.hb_filter.accept(str(getattr(msg, 'frame_id', '')), int(getattr(msg, 'seq', 0)))
+            if not ok:
+                self.backend.logerr_throttle(10.0, f'central unit heartbeat refused: {why}')
+                return
         self.watchdog.beat(self.wall_clock())
 
     # ---- data feed + heartbeat watchdog -----------------------------------------------------------
@@ -225,6 +236,12 @@ class RobotAgent(Agent):
         """data_feed at DATA_FEED_RATE_HZ while it changes, every DATA_FEED_IDLE_PERIOD while it does not
         (a landed or hovering idle robot), not at all while nobody subscribes. Why: four feeds at 10 Hz to
         the central unit, the recorder and the ground station, mostly of robots waiting at home."""
+        silent = self.sm_silent_for()
+        if silent > C.SM_STALL_S:
+            # the data_feed is this agent's heartbeat to the central unit: it stops when the state machine
+            # stopped working, so that the central unit sees the robot silent and gives its work to others
+            self.backend.logerr_throttle(10.0, f'state machine silent for {silent:.0f} s (stuck): data_feed withheld')
+            return
         count = getattr(self.feed_pub, 'get_num_connections', None)
         if count is not None and count() == 0:
             return

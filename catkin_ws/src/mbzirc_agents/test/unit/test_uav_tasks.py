@@ -318,3 +318,41 @@ def test_started_on_the_ground_frees_a_previous_runs_regions_and_is_home():
         be.shutdown = True
         ual.stop = True
         agent.shutdown()
+
+
+def test_replayed_heartbeats_are_not_believed(uav):
+    """A heartbeat replayed from a bag (another mission, or this central unit's old ones) must not keep the
+    agent believing a dead central unit is alive."""
+    from std_msgs.msg import Header
+    agent, ual, be = uav
+    agent.set_mission('m1')
+    agent.watchdog.timeout = 0.3
+    agent.watchdog.return_home_timeout = 100
+    agent._on_heartbeat(Header(seq=5, frame_id='central_unit/m1/live'))
+    assert agent.accepting
+    deadline = be.clock.now() + 3.0
+    while agent.accepting and be.clock.now() < deadline:    # the central unit dies; a bag replays beats
+        agent._on_heartbeat(Header(seq=99, frame_id='central_unit/m0/old'))    # another mission
+        agent._on_heartbeat(Header(seq=3, frame_id='central_unit/m1/live'))    # its own, replayed
+        be.clock.sleep(0.05)
+    assert not agent.accepting and 'heartbeat' in agent.reject_reason
+    agent._on_heartbeat(Header(seq=1, frame_id='central_unit/m1/restarted'))  # a real restart: believed
+    deadline = be.clock.now() + 2.0
+    while not agent.accepting and be.clock.now() < deadline:
+        be.clock.sleep(0.05)
+    assert agent.accepting
+
+
+def test_data_feed_withheld_while_the_state_machine_is_stuck(uav):
+    agent, ual, be = uav
+    sent = []
+    agent.feed_pub = type('P', (), {'publish': lambda self, m: sent.append(m)})()
+    agent._last_feed = (None, -1e9)
+    agent._on_timer()
+    assert sent, 'a working agent sends its data_feed'
+    agent.note_sm_alive = lambda: None                              # the state machine stopped working
+    agent.sm_beat = be.wall_time() - C.SM_STALL_S - 1
+    sent.clear()
+    agent._last_feed = (None, -1e9)
+    agent._on_timer()
+    assert not sent
