@@ -59,12 +59,16 @@ for p in "${PKGS[@]}"; do
     log="$RESULTS/${p}__$(basename "$t" .test).log"
     # rostest --text exits 0 even when test cases fail: judge from its summary (and a non-empty run).
     clean="$(sed 's/\x1b\[[0-9;]*m//g' "$log")"
+    # A .test file with several <test> nodes prints a summary per test: every one must succeed.
     grep -q '^ \* RESULT: SUCCESS' <<<"$clean" || { [ $rc -eq 0 ] && rc=1; }
+    grep -q '^ \* RESULT: FAIL' <<<"$clean" && { [ $rc -eq 0 ] && rc=1; }
     grep -qE '^ \* TESTS: [1-9]' <<<"$clean" || { [ $rc -eq 0 ] && rc=1; }
     secs=$(( $(date +%s) - start ))
-    n_tests=$(grep -oE '^ \* TESTS: [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | tail -1); n_tests=${n_tests:-0}
+    n_tests=$(grep -oE '^ \* TESTS: [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | awk '{s+=$1} END {print s+0}')
+    n_tests=${n_tests:-0}
     n_bad=$(grep -oE '^ \* (ERRORS|FAILURES): [0-9]+' <<<"$clean" | grep -oE '[0-9]+$' | awk '{s+=$1} END {print s+0}')
     n_bad=${n_bad:-0}
+    [ "$n_bad" -gt 0 ] && { [ $rc -eq 0 ] && rc=1; }
     if [ $rc -eq 0 ]; then passed=$((passed + n_tests)); echo "    ok: $n_tests test cases (${secs}s)"
     else passed=$((passed + (n_tests > n_bad ? n_tests - n_bad : 0))); failed=$((failed + (n_bad > 0 ? n_bad : 1)))
          failures+=("$name"); echo "    FAILED rc=$rc (${secs}s), log:"
