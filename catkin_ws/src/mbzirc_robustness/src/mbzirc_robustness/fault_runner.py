@@ -94,6 +94,7 @@ class Monitor:
         self.objects_log: deque[tuple[float, dict[int, int]]] = deque(maxlen=600)  # (wall, id -> status)
         self.objects_walls: deque[float] = deque(maxlen=5000)
         self.regions_log: deque[tuple[float, frozenset]] = deque(maxlen=120)     # (wall, {agent/label})
+        self.feeds: dict[str, deque] = {}          # robot -> (wall, active_sub_state) of its data_feeds
         self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=100)         # clock faults only
         self.subs = [rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=10),
                      rospy.Subscriber("/central_unit/heartbeat", Header, self._on_heartbeat, queue_size=1),
@@ -126,8 +127,16 @@ class Monitor:
     def _on_heartbeat(self, _msg) -> None:
         self.last_heartbeat_wall = self._seen("/central_unit/heartbeat")
 
-    def _on_feed(self, _msg, robot: str) -> None:
-        self.last_feed_wall[robot] = self._seen(f"/mbzirc2020_{robot}/data_feed")
+    def _on_feed(self, msg, robot: str) -> None:
+        now = self._seen(f"/mbzirc2020_{robot}/data_feed")
+        self.last_feed_wall[robot] = now
+        with self.lock:
+            self.feeds.setdefault(robot, deque(maxlen=2000)).append((now, str(msg.active_sub_state)))
+
+    def feeds_since(self, robot: str, wall: float) -> list[tuple[float, str]]:
+        """(wall s after ``wall``, active_sub_state) of the robot's data_feeds since then."""
+        with self.lock:
+            return [(t - wall, st) for t, st in self.feeds.get(robot, ()) if t >= wall]
 
     def _on_objects(self, msg) -> None:
         objs = {int(o.id): int(o.status) for o in msg.objects}
@@ -430,6 +439,32 @@ class FaultSuite:
         f.result.update({"survived": v["ok"], "detail": v["detail"], "outputs_check": v})
         self.say(f"{f.kind}: {v['detail']}")
 
+    def _task_exception(self, f: F.Fault, mon: Monitor) -> None:
+        """Call the robot's agent's inject_fault (served with ~fault_injection, which the ground-station
+        launch sets for UAV 1): the state machine's next step raises, in the idle state (which used to end
+        its thread: a zombie) or in the running task; then watch that the agent works on."""
+        import rospy
+        from std_srvs.srv import Trigger
+        name = f"/mbzirc2020_{f.target}/inject_fault"
+        f.result["t_fault"] = mon.sim_time()
+        t0 = time.monotonic()
+        try:
+            rospy.wait_for_service(name, timeout=5.0)
+            rospy.ServiceProxy(name, Trigger)()
+        except Exception as e:  # noqa: BLE001 - no injection: the fault could not be run
+            f.result.update({"survived": False, "detail": f"could not inject: {type(e).__name__}: {e}"})
+            self.say(f"task exception: {f.result['detail']}")
+            return
+        self.say(f"exception injected into the agent of robot {f.target}")
+        watch = 45.0
+        time.sleep(watch)
+        with mon.lock:
+            hist = list(mon.history)
+        v = F.judge_working(mon.feeds_since(f.target, t0), hist, f.target, f.result["t_fault"], watch)
+        f.result.update({"survived": v["ok"], "detail": v["detail"], "working_check": v,
+                         "recovery_wall_s": None})
+        self.say(f"task exception: {v['detail']}")
+
     def _flood(self, f: F.Fault, mon: Monitor) -> None:
         """Publish ObjectDetectionList on robot ``target``'s sensed_objects at ``rate_hz`` for ``duration_s``
         wall seconds, each with one fire far outside the arena at a new place (never confirmed: each is a
@@ -591,7 +626,8 @@ class FaultSuite:
                 pending.remove(f)
                 f.done = True
                 background = {F.KIND_CRASH: self._crash, F.KIND_CLOCK_JUMP: self._clock_fault,
-                              F.KIND_SIM_RESTART: self._clock_fault, F.KIND_FLOOD: self._flood}
+                              F.KIND_SIM_RESTART: self._clock_fault, F.KIND_FLOOD: self._flood,
+                              F.KIND_TASK_EXCEPTION: self._task_exception}
                 if f.kind in background:  # recovery is watched in the background: the timeline runs on
                     th = threading.Thread(target=background[f.kind], args=(f, mon), daemon=True)
                     th.start()

@@ -37,6 +37,7 @@ CHECK_DETECTIONS = "detections"        # fire detector: inputs connected again a
 CHECK_INPUTS = "inputs"                # every input it received before is connected again
 CHECK_REGIONS = "regions"              # region manager: every reservation it held is there after the respawn
 CHECK_OUTPUTS = "outputs"              # every periodic output of the system published again (clock faults)
+CHECK_WORKING = "working"              # task exception: the agent's state machine works on (not a zombie)
 
 
 @dataclass
@@ -70,7 +71,8 @@ def default_schedule(uavs: int = 3, link_cut_s: float = 60.0, start_s: float = 4
     for ``link_cut_s`` and UAV 3's for good; once UAV 2 is back, one every ``spacing_s``: kill -9 of the
     fire detector (of the UAV cut for a while: back on its feet), of UAV 1's agent, of the estimator, of the
     region manager, of that UAV's circle detector (water UAVs only) and of the UGV agent, a /clock jump 10 s back, a 1 kHz flood of sensed_objects (10 s), the simulator's clock
-    restarting, and kill -9 of the central unit last (without it nothing else can be judged). With fewer
+    restarting, an exception injected into UAV 1's agent (its idle state or running task), and kill -9 of
+    the central unit last (without it nothing else can be judged). With fewer
     UAVs the cuts go to the last UAVs present."""
     cut_temp = str(min(2, uavs))
     cut_perm = str(uavs) if uavs >= 3 else None
@@ -87,6 +89,7 @@ def default_schedule(uavs: int = 3, link_cut_s: float = 60.0, start_s: float = 4
         Fault(KIND_CLOCK_JUMP, "/clock", 0, jump_s=10.0, check=CHECK_OUTPUTS),
         Fault(KIND_FLOOD, "1", 0, duration_s=10.0, rate_hz=1000.0, check=CHECK_OUTPUTS),
         Fault(KIND_SIM_RESTART, "/clock", 0, check=CHECK_OUTPUTS),
+        Fault(KIND_TASK_EXCEPTION, "1", 0, check=CHECK_WORKING),
     ]
     if ugv:
         steps.insert(5, Fault(KIND_CRASH, "/mbzirc2020_0/agent", 0, check=CHECK_DATA_FEED, robot="0"))
@@ -194,6 +197,31 @@ def judge_io_restored(before: set[str], after: set[str]) -> dict[str, Any]:
     missing = sorted(before - after)
     return {"ok": not missing, "inputs_before": sorted(before), "inputs_missing": missing,
             "detail": f"inputs not connected again: {missing}" if missing else "every input connected again"}
+
+
+def judge_working(feeds_after: list[tuple[float, str]], history: list[tuple[float, dict[str, Any]]], robot: str,
+                  t_inject: float, watch_wall_s: float, min_feeds: int = 3) -> dict[str, Any]:
+    """Verdict on an exception injected into a robot's agent: its state machine works on. The agent's
+    data_feed (withheld when its state machine stops working) keeps coming during the ``watch_wall_s``
+    after the injection (``feeds_after``: (wall s after the injection, active_sub_state)), none says FAILED,
+    and the central unit still sees the robot alive at the end. Whether it started a task after the
+    injection is reported (``task_after``), not required: a robot may rightly have nothing to do."""
+    late = [t for t, _ in feeds_after if t >= watch_wall_s - 10.0]
+    failed = [st for _, st in feeds_after if st.startswith("FAILED")]
+    after = [(t, s) for t, s in history if t > t_inject]
+    alive_end = bool(after) and bool(_agent(after[-1][1], robot).get("alive"))
+    tasks = [_agent(s, robot).get("task", "") for _, s in after]
+    started = next((b for a, b in zip([""] + tasks, tasks) if b and b != a), None)
+    problems = []
+    if len(late) < min_feeds:
+        problems.append(f"its data_feed stopped ({len(late)} in the last 10 s of {watch_wall_s:.0f} s): "
+                        "the state machine died or is stuck")
+    if failed:
+        problems.append(f"the agent declared itself failed: {failed[0]}")
+    if not alive_end:
+        problems.append("the central unit does not see it alive")
+    return {"ok": not problems, "feeds_after": len(feeds_after), "task_after": started,
+            "detail": "; ".join(problems) or ("state machine working" + (f", then ran {started}" if started else ""))}
 
 
 def compare_regions(before: Iterable[str], after: Iterable[str]) -> dict[str, Any]:

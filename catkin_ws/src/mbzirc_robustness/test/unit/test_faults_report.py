@@ -15,7 +15,7 @@ def test_default_schedule_has_every_fault_kind_once():
     kinds = [f.kind for f in sched]
     assert kinds.count(F.KIND_CRASH) == 7
     assert kinds.count(F.KIND_LINK_CUT) == 1 and kinds.count(F.KIND_LINK_CUT_PERMANENT) == 1
-    for k in (F.KIND_CLOCK_JUMP, F.KIND_SIM_RESTART, F.KIND_FLOOD):
+    for k in (F.KIND_CLOCK_JUMP, F.KIND_SIM_RESTART, F.KIND_FLOOD, F.KIND_TASK_EXCEPTION):
         assert kinds.count(k) == 1, k
     cut = next(f for f in sched if f.kind == F.KIND_LINK_CUT)
     assert cut.target == "2" and cut.duration_s == 60.0
@@ -289,3 +289,16 @@ def test_region_manager_restart_and_mission_floor():
     assert F.judge_mission({"fires_extinguished": 5, "fires_total": 8}, ["2"], floor, expected_lost=["3"])
     assert F.judge_mission(None, [], floor)
     assert F.judge_mission({"fires_extinguished": 5, "fires_total": 8}, ["3"], floor, expected_lost=["3"]) == []
+
+
+def test_task_exception_verdict_fails_a_zombie_or_failed_agent():
+    h = [status(t, {"1": True}, {}, tasks={"1": "x" if t > 120 else ""}) for t in range(100, 160, 5)]
+    flowing = [(float(k), "") for k in range(0, 45)]
+    v = F.judge_working(flowing, h, "1", t_inject=105, watch_wall_s=45)
+    assert v["ok"] and v["task_after"] == "x", v
+    zombie = [(float(k), "") for k in range(0, 5)]                 # feeds stopped soon after the injection
+    assert not F.judge_working(zombie, h, "1", 105, 45)["ok"]
+    failed = flowing + [(44.0, "FAILED: state machine died 4 times")]
+    assert "declared itself failed" in F.judge_working(failed, h, "1", 105, 45)["detail"]
+    dead = h + [status(200, {"1": False}, {})]
+    assert not F.judge_working(flowing, dead, "1", 105, 45)["ok"]
