@@ -356,3 +356,15 @@ def test_data_feed_withheld_while_the_state_machine_is_stuck(uav):
     agent._last_feed = (None, -1e9)
     agent._on_timer()
     assert not sent
+
+
+def test_go_to_a_point_inside_the_building_from_outside_is_refused(uav):
+    """A planned go-to (follow_path's legs) to a point inside a building outline, the UAV outside, would fly
+    straight into the wall (seen under realistic uncertainty: a waypoint inside the extension, from an
+    estimate off by the GNSS error): refused with a clear message, the UAV stays outside."""
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(26.5, 18.8, 1.0)))
+    assert s.wait(10) == 'aborted' and 'inside the building outline' in s.result.message
+    assert ual.pos[0] < 11.0

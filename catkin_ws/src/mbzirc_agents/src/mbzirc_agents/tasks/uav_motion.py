@@ -140,8 +140,14 @@ class GoTo(AgentTask):
         start = a.position()
         # (a footprint counts only up to its roof: in front of a facade D fire, above the extension, the
         # UAV is outside and its legs are planned around the tower)
-        indoors = (in_footprint(start, standing_at(start, C.BUILDINGS))
-                   or in_footprint(target, standing_at(target, C.BUILDINGS)))
+        start_in = in_footprint(start, standing_at(start, C.BUILDINGS))
+        target_in = in_footprint(target, standing_at(target, C.BUILDINGS))
+        if target_in and not start_in and not self.args.get('straight'):
+            # only a window entry (a straight move) goes in from outside: a planned go-to to a point inside
+            # the outline (a waypoint from an estimate with a metre of GNSS error) would fly into the wall
+            raise TaskError(f'waypoint {_fmt(target)} is inside the building outline, the UAV outside: '
+                            'refused (enter through a window)')
+        indoors = start_in or target_in
         # indoors (or entering / leaving through a window) the caller's waypoints are the path
         legs = [tuple(target)] if self.args.get('straight') or indoors else self._legs(start[:3], target)
         margin = a.p.region_margin
