@@ -44,9 +44,12 @@ if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own l
   GCS_PID=$!
 fi
 gcs_shown=0
-stop_gcs() {
-  [ -n "$GCS_PID" ] && kill -0 "$GCS_PID" 2>/dev/null && kill -INT "$GCS_PID" 2>/dev/null
-  [ -n "$GCS_PID" ] && { wait "$GCS_PID" 2>/dev/null; GCS_PID=""; }
+stop_gcs() {   # Ctrl+C, then its whole group after 10 s (a `roslaunch --wait` whose master never came)
+  [ -n "$GCS_PID" ] || return 0
+  kill -INT "$GCS_PID" 2>/dev/null
+  for _ in $(seq 1 20); do kill -0 "$GCS_PID" 2>/dev/null || break; sleep 0.5; done
+  kill -TERM -- "-$GCS_PID" 2>/dev/null
+  wait "$GCS_PID" 2>/dev/null; GCS_PID=""
 }
 stop() {
   stop_gcs
