@@ -55,8 +55,9 @@ def talker_listener(lab: NetnsLab, cut_s: float = 4.0, workdir: str | None = Non
     echo_log = os.path.join(workdir, "listener.log")
     gs_ip = lab.hosts[C.GROUND_STATION].ip
     lab.popen(C.GROUND_STATION, ["roscore", "-p", str(C.MASTER_PORT)], log_path=os.path.join(workdir, "roscore.log"))
-    if not wait_tcp(lab, "uav1", gs_ip, C.MASTER_PORT, timeout=30):
-        res.problems.append("the master on gs is not reachable from uav1")
+    # roscore takes 10-40 s to open its port under a load average of 50-70 (seen in make test)
+    if not wait_tcp(lab, "uav1", gs_ip, C.MASTER_PORT, timeout=90):
+        res.problems.append("the master on gs is not reachable from uav1 (90 s)")
         return res
     time.sleep(1.0)  # rosout and the parameter server come up just after the port opens
     lab.popen("uav2", ["rostopic", "echo", "-p", "/chatter"], log_path=echo_log)

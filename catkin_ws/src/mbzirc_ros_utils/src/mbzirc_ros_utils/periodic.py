@@ -150,6 +150,8 @@ class PeriodicTimer:
         try:
             self.callback(self.clock.event(expected, real))
         except Exception:   # noqa: BLE001 - one bad tick must not end the timer; logged
+            if self.clock.is_shutdown() or self._stop.is_set():
+                return          # publishing while rospy shuts down: not an error of the callback
             self.errors += 1
             self.clock.error(f'{self.name}: periodic callback raised (the timer goes on): '
                              f'{traceback.format_exc(limit=6)}')
