@@ -4,9 +4,12 @@
 - the robots move on the map as the simulator moves them: each marker, converted back from canvas pixels to
   metres, is within 0.5 m of the simulator's ground truth (/sim/robots, interpolated at the sim time of the
   pose the page shows: at 4x real time a 10 Hz page is up to 0.4 sim seconds behind, 0.6 m at 1.6 m/s);
-- the fire list shows the statuses the estimator publishes, and follows them when they change.
+- the fire list shows the statuses the estimator publishes, and follows them when they change;
+- the Home button of a UAV (confirmed on the page) brings it home: it lands within 1.5 m of its home;
+- EMERGENCY LAND ALL pauses the central unit and lands every UAV.
 """
 import bisect
+import json
 import math
 import threading
 import time
@@ -28,7 +31,7 @@ class Truth:
 
     def __init__(self):
         self.lock = threading.Lock()
-        self.robot_t, self.robot_xy = [], []
+        self.robot_t, self.robot_xy, self.last_robots = [], [], None
         self.fire_t, self.fire_status = [], []
         self.ids = [str(i) for i in rospy.get_param("/sim/robot_ids")]
         rospy.Subscriber("/sim/robots", PoseArray, self.on_robots, queue_size=50)
@@ -38,6 +41,7 @@ class Truth:
         with self.lock:
             self.robot_t.append(msg.header.stamp.to_sec())
             self.robot_xy.append({rid: (p.position.x, p.position.y) for rid, p in zip(self.ids, msg.poses)})
+            self.last_robots = [(p.position.x, p.position.y, p.position.z) for p in msg.poses]
 
     def on_fires(self, msg):
         with self.lock:
@@ -122,6 +126,37 @@ class TestLivePage(unittest.TestCase):
         self.assertTrue(history, "no fire shown")
         self.assertTrue(any(f in h and h[f] != history[-1][f] for h in history for f in history[-1]),
                         "no fire status change seen on the page: %s" % history[-3:])
+
+    def test_3_send_home_brings_a_uav_home(self):
+        """The Home button of UAV 2 (confirmed): the simulator's UAV 2 lands within 1.5 m of its home."""
+        homes = json.loads(self.page.eval("JSON.stringify(window.gcs.info.arena.homes)"))
+        home = next(h["home"] for h in homes if h["id"] == "2")
+        self.page.eval("window.confirm = () => true; "
+                       "document.querySelector('.robot[data-robot=\"2\"] button[data-cmd=send_home]').click(); true")
+        self.page.wait_for(lambda s: "send_home UAV 2: done" in self.page.eval(
+            "document.getElementById('log').innerText"), 60, "the command done in the log")
+        deadline = time.monotonic() + 120
+        last = None
+        while time.monotonic() < deadline:
+            with self.truth.lock:
+                i = self.truth.ids.index("2")
+                last = self.truth.last_robots[i] if self.truth.last_robots else None
+            if last and math.hypot(last[0] - home[0], last[1] - home[1]) < 1.5 and last[2] < 0.3:
+                break
+            time.sleep(0.5)
+        else:
+            self.fail("UAV 2 did not land at home %s; last seen at %s" % (home, last))
+
+    def test_4_emergency_land_all(self):
+        """EMERGENCY LAND ALL (confirmed): the central unit pauses and every UAV lands where it is."""
+        self.page.eval("window.confirm = () => true; document.querySelector('button[data-cmd=land_all]').click(); true")
+        self.page.wait_for(lambda s: "land_all: done" in self.page.eval("document.getElementById('log').innerText"),
+                           60, "the command done in the log")
+        landed = self.page.wait_for(lambda s: all(r["ual_state"] == "LANDED_DISARMED" for r in json.loads(
+            self.page.eval("JSON.stringify(window.gcs.frame.robots)")) if r["kind"] == "uav"), 120,
+            "every UAV landed")
+        self.assertTrue(landed)
+        self.assertIn("PAUSED", self.page.eval("document.getElementById('cu').innerText"))
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ from typing import Any, Dict
 
 import rospy
 
+from .operator_services import OperatorServices
 from .params import OTHER_NODE_PARAMS, AgentParams, check_values
 from .ros_backend import RosBackend
 
@@ -29,6 +30,7 @@ def main(agent_class: type, node_name: str) -> None:
     agent = agent_class(agent_id, RosBackend(), params, ns)
     agent.set_mission(str(rospy.get_param('/run_id', '') or ''))
     agent.start()
+    operator = OperatorServices(agent, ns)   # noqa: F841 - the ground station's commands (operator_services.py)
     sis = None
     try:
         import smach_ros

@@ -26,6 +26,7 @@ from std_msgs.msg import Header, String
 from . import constants as C
 from .goal_timeouts import GoalClock
 from .layout import Layout, load_world
+from .operator import OperatorGate
 from .strategy import Command, Strategy, StrategyParams
 from .world_model import AgentView, FireView, WorldView, fire_kind
 
@@ -106,6 +107,8 @@ class CentralUnit:
             uavs_take_ground_floor_indoors=bool(rospy.get_param("~uavs_take_ground_floor_indoors", False)),
         )
         self.strategy = Strategy(params)
+        self.operator = OperatorGate(bool(rospy.get_param("~wait_for_start", False)))   # operator.py
+        self.operator_services = self.operator.advertise()
         self.lock = threading.Lock()
         self.agents: dict[str, AgentView] = {}
         self.fires: dict[int, FireView] = {}
@@ -290,7 +293,7 @@ class CentralUnit:
             elif alive and agent_id in self.silent:
                 rospy.loginfo(f"central_unit: agent {agent_id} is back")
                 self.silent.discard(agent_id)
-        for cmd in self.strategy.decide(world):
+        for cmd in self.strategy.decide(world) if self.operator.deciding() else []:
             self._send(cmd)
         for agent_id in sorted(self.strategy.crashed - self.freed):
             self._free_regions_of(agent_id)
@@ -313,7 +316,8 @@ class CentralUnit:
                  for f in world.fires.values()]
         self.status_pub.publish(String(json.dumps({"t": round(world.now, 1), "agents": agents, "fires": fires,
                                                    "floor_owner": self.strategy.floor_owner,
-                                                   "indoor_owner": self.strategy.indoor_owner})))
+                                                   "indoor_owner": self.strategy.indoor_owner,
+                                                   **self.operator.status()})))
 
     def _shutdown(self) -> None:
         self.tick_timer.shutdown()
