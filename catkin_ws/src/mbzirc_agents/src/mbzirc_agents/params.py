@@ -81,6 +81,8 @@ class AgentParams:
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
+    top_up_max_std: float = _param(1.0, 'm: a track is well localised for a top-up when its position std is '
+                                        'at most this (above the estimator\'s ~pose_std floor, 0.7 m)')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
     pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')
     pose_jump_hold: float = _param(2.0, 's the robot holds (zero velocity) while doubting a jump; a jumped '

@@ -17,7 +17,6 @@ from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
-TOP_UP_MAX_STD = 0.4       # m: and its position known at least this well
 
 
 def gen_enter_building(goal, agent) -> dict:
@@ -205,12 +204,15 @@ class ExtinguishIndoorFire(AgentTask):
             self.sleep(0.25)
 
     def _well_localised(self, fire_id: int) -> bool:
-        """A confirmed track known to TOP_UP_MAX_STD: a real fire, not a stray estimate."""
+        """A confirmed track known to ~top_up_max_std: a real fire, not a stray estimate.
+
+        The threshold must stay above the estimator's floor on a track's std (its ~pose_std, the robots'
+        GNSS error): below it no track ever qualifies and every fire a dry tank left is abandoned."""
         obj = self.agent.fire(fire_id)
         cov = obj.pose.covariance
         std = math.sqrt(max(cov[0], cov[7], 0.0))
         return (obj.status in (C.STATUS_ACTIVE, C.STATUS_LOST) and obj.num_updates >= TOP_UP_MIN_UPDATES
-                and math.isfinite(std) and std <= TOP_UP_MAX_STD)
+                and math.isfinite(std) and std <= self.agent.p.top_up_max_std)
 
     def _top_up(self, fire_id: int) -> str:
         """Water a fire that reads cold but was never put out, for ~top_up_time, then mark it out.
