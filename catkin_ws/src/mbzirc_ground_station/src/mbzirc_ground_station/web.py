@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import threading
 import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -24,6 +25,7 @@ SSE_KEEPALIVE_S = 5.0
 FULL_FRAME_EVERY = 10     # tracks (the heavy part) go in every 10th frame and in a page's first frame
 SSE_RETRY_MS = 1000
 SOCKET_TIMEOUT_S = 20.0
+SSE_SEND_BUFFER = 32 * 1024   # bytes; about 3 frames
 
 
 class _Server(ThreadingHTTPServer):
@@ -209,6 +211,8 @@ class GroundStationServer:
                     self._json(503, {"error": "too many pages open"})
                     return
                 try:
+                    # a small send buffer: a page that reads slowly gets fresh frames late, not a queue of old ones
+                    self.connection.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SSE_SEND_BUFFER)
                     self.send_response(200)
                     self.send_header("Content-Type", "text/event-stream")
                     self.send_header("Cache-Control", "no-store")
