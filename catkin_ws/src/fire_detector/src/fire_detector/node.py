@@ -7,6 +7,7 @@ from typing import Optional, Tuple
 import cv2
 import numpy as np
 import rospy
+from rospy.numpy_msg import numpy_msg
 from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList, ThermalImage
 from mbzirc_comm_objs.srv import CheckFire, CheckFireResponse
@@ -73,8 +74,11 @@ class FireDetectorNode:
         self.srv = rospy.Service("thermal_detection/fire_detected", CheckFire, self.on_check_fire)
         rospy.Subscriber("ual/pose", PoseStamped, self.on_pose, queue_size=1)
         if config.camera_direction == C.CAMERA_DIRECTION_FORWARD:
-            rospy.Subscriber("scan", LaserScan, self.on_scan, queue_size=1)
-        rospy.Subscriber("teraranger_evo_thermal/raw_temp_array", Float64MultiArray, self.on_temperatures, queue_size=5)
+            # numpy_msg: the arrays arrive as numpy views of the message bytes, not tuples of Python floats
+            # (720 ranges at 10 Hz, 1024 temperatures at 14 Hz: the node's main cost before)
+            rospy.Subscriber("scan", numpy_msg(LaserScan), self.on_scan, queue_size=1)
+        rospy.Subscriber("teraranger_evo_thermal/raw_temp_array", numpy_msg(Float64MultiArray), self.on_temperatures,
+                         queue_size=5)
         if self.debug_view:
             rospy.Subscriber("teraranger_evo_thermal/rgb_image", Image, self.on_rgb_image, queue_size=1)
         rospy.loginfo("fire_detector: %s camera, threshold %.1f degC, filter %d frames",
@@ -94,7 +98,7 @@ class FireDetectorNode:
         rng = front_laser_range(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,
                                 msg.range_max, self.detector.config.angle_amplitude)
         if rng is None:
-            if (not msg.ranges or not np.isfinite(msg.angle_increment) or msg.angle_increment == 0.0
+            if (len(msg.ranges) == 0 or not np.isfinite(msg.angle_increment) or msg.angle_increment == 0.0
                     or msg.range_min > msg.range_max
                     or np.isnan(np.asarray(msg.ranges, dtype=float)).any()):
                 rospy.logerr_throttle(THROTTLE_S, "fire_detector: malformed scan (no ranges, NaN or bad angles)")
