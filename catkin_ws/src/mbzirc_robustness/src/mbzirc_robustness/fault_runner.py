@@ -358,7 +358,9 @@ class FaultSuite:
             v = F.compare_tracks(objects_before, after)
             return v["same"] and (mon.last_tracks or 0) >= tracks_before, v
         if f.check == F.CHECK_REGIONS:
-            after = mon.regions_after(t_new)
+            after = self._resumed_regions(t_kill)            # what the new process says it resumed
+            if after is None:
+                after = mon.regions_after(t_new)             # else its first /regions
             if after is None:
                 return False, None
             if regions_before is None:
@@ -373,6 +375,17 @@ class FaultSuite:
                     v["ok"], v["detail"] = False, v["detail"] + "; its CheckFire service does not answer"
             return v["ok"], v
         return True, None
+
+    def _resumed_regions(self, t_kill: float) -> Optional[set[str]]:
+        """The reservations the respawned region manager logged as resumed (its gs ROS log), if it did."""
+        since = datetime.now() - timedelta(seconds=time.monotonic() - t_kill)
+        lines: list[str] = []
+        for path in glob.glob(os.path.join(self.out, "logs", C.GROUND_STATION, "*", "region_manager*.log")):
+            if "latest" in path or path.endswith("-stdout.log"):
+                continue
+            with open(path, encoding="utf-8", errors="replace") as fh:
+                lines += fh.readlines()
+        return F.resumed_regions(lines, since)
 
     def _watch_decisions(self, f: F.Fault, mon: Monitor) -> dict[str, Any]:
         """Wait (at most DECISION_WITHIN_S sim s after its first status, 3 x that in wall time) for the

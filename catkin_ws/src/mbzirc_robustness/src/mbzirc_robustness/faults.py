@@ -224,6 +224,25 @@ def judge_working(feeds_after: list[tuple[float, str]], history: list[tuple[floa
             "detail": "; ".join(problems) or ("state machine working" + (f", then ran {started}" if started else ""))}
 
 
+RESUMED_LINE = re.compile(r"region manager: resumed (\d+) reservations from .*?\): ?(.*)$")
+
+
+def resumed_regions(lines: Iterable[str], since: datetime) -> Optional[set[str]]:
+    """The reservations (``agent/label``) a respawned region manager says it resumed, from its ROS log
+    lines after ``since`` (None: no such line). Why not its first /regions: its owners may rightly free
+    or replace them in the second before that (a respawned agent settling its regions)."""
+    found = None
+    for line in lines:
+        m = ROSOUT_LINE.match(line.rstrip("\n"))
+        if not m:
+            continue
+        t = datetime.strptime(m.group(2), "%Y-%m-%d %H:%M:%S").replace(microsecond=int(m.group(3)) * 1000)
+        r = RESUMED_LINE.search(m.group(4))
+        if r and t >= since:
+            found = {x.strip() for x in r.group(2).split(",") if x.strip()}
+    return found
+
+
 def compare_regions(before: Iterable[str], after: Iterable[str]) -> dict[str, Any]:
     """Verdict on a region manager restart: the reservations (``agent/label``) of its last /regions before
     the kill are all in its first /regions after the respawn (nobody could free them meanwhile)."""

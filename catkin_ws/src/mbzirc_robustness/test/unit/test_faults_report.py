@@ -302,3 +302,15 @@ def test_task_exception_verdict_fails_a_zombie_or_failed_agent():
     assert "declared itself failed" in F.judge_working(failed, h, "1", 105, 45)["detail"]
     dead = h + [status(200, {"1": False}, {})]
     assert not F.judge_working(flowing, dead, "1", 105, 45)["ok"]
+
+
+def test_resumed_regions_are_read_from_the_managers_log():
+    from datetime import datetime
+    lines = ["[rosout][INFO] 2026-11-24 02:15:25,418: region manager: no state file x; starting with no reservations\n",
+             "[rosout][INFO] 2026-11-24 02:17:05,215: region manager: resumed 3 reservations from /o/regions.json "
+             "(regions saved at t=266.7 s): 1/go_to, 2/hold, 3/go_to\n"]
+    got = F.resumed_regions(lines, datetime(2026, 11, 24, 2, 16, 50))
+    assert got == {"1/go_to", "2/hold", "3/go_to"}
+    assert F.compare_regions({"1/go_to", "2/hold"}, got)["same"]
+    assert not F.compare_regions({"1/go_to", "4/x"}, got)["same"]
+    assert F.resumed_regions(lines, datetime(2026, 11, 24, 2, 18, 0)) is None

@@ -292,15 +292,18 @@ class ObjectEstimator:
         return ''
 
     # ---- persistence (the node saves this to a file so that a respawned estimator resumes) ---------
-    def to_state(self) -> Dict[str, Any]:
-        """Every track and the next id as plain JSON-able data (see `load_state`)."""
+    def to_state(self, include_tentative: bool = True) -> Dict[str, Any]:
+        """Every track (or only the published ones) and the next id as plain JSON-able data (see
+        `load_state`). Why the choice: a flood of scattered detections makes thousands of tentative tracks
+        that nobody has seen; writing them all every second stalled the node."""
+        keep = None if include_tentative else {t.id for t in self.objects(False)}
         return {'next_id': self._next_id,
                 'tracks': [{'id': t.id, 'type': t.type, 'position': [float(v) for v in t.position],
                             'covariance': [[float(v) for v in row] for row in t.covariance],
                             'first_seen': t.first_seen, 'last_update': t.last_update,
                             'num_updates': t.num_updates, 'status': t.status, 'sub_type': t.sub_type,
                             'scale': [float(v) for v in t.scale], 'agents': sorted(t.agents), 'born': t.born}
-                           for _, t in sorted(self.tracks.items())]}
+                           for _, t in sorted(self.tracks.items()) if keep is None or t.id in keep]}
 
     def load_state(self, state: Dict[str, Any]) -> None:
         """Replace the tracks with those of `to_state`'s output; ValueError (tracks unchanged) when any

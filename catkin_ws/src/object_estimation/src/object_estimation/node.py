@@ -96,7 +96,7 @@ class EstimatorNode:
         ids = ', '.join(f'{t.id}:{C.STATUS_NAMES[t.status]}' for t in self.core.tracks.values())
         rospy.loginfo(f'estimator: resumed {len(self.core.tracks)} tracks from {self.state_file} '
                       f'({res.reason}), next id {self.core.next_id}: {ids}')
-        self._saved_body = json.dumps(self.core.to_state(), sort_keys=True)
+        self._saved_body = json.dumps(self.core.to_state(include_tentative=self.publish_tentative), sort_keys=True)
         self._saved_sig = self._published_signature()
 
     def _published_signature(self) -> tuple:
@@ -115,7 +115,7 @@ class EstimatorNode:
                 sig = self._published_signature()
                 if not (force or due or sig != self._saved_sig):
                     return                  # cheap exit at most publish ticks: nothing serialised
-                state = self.core.to_state()
+                state = self.core.to_state(include_tentative=self.publish_tentative)
             body = json.dumps(state, sort_keys=True)
             if body == self._saved_body:
                 self._last_save_wall = time.monotonic()     # checked: look again in save_period

@@ -126,3 +126,11 @@ def test_stale_files_are_ignored(tmp_path):
     assert store.load(path, '', now=20.0).kind == store.STALE
     assert store.load(path, 'run-a', now=500.5).kind == store.OK               # same mission, just after
     assert store.load(path, '', now=0.0).kind == store.OK                      # nothing to judge by
+
+
+def test_state_without_tentative_tracks_keeps_every_published_one():
+    est = estimator_with_tracks()
+    state = est.to_state(include_tentative=False)
+    assert {d['id'] for d in state['tracks']} == {t.id for t in est.objects()}
+    assert len(state['tracks']) < len(est.to_state()['tracks'])        # the tentative fire is not written
+    assert state['next_id'] == est.next_id
