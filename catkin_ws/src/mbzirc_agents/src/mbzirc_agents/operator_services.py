@@ -17,7 +17,7 @@ from typing import Any, Callable
 import rospy
 from std_srvs.srv import Trigger, TriggerResponse
 
-STOP_TIMEOUT_S = 10.0   # wall s for the running task to stop after a preempt
+STOP_TIMEOUT_S = 20.0   # wall s for the running task to stop after a preempt (or a take-off to end)
 
 
 class OperatorServices:
@@ -41,7 +41,8 @@ class OperatorServices:
         """Refuse goals from now on, stop the running task; True once the agent is idle."""
         self.hold_reason = reason
         rospy.logwarn(f'operator: {reason}')
-        self.agent.preempt_running(f'operator: {reason}')
+        if self.agent.running_task() != 'take_off':   # a take-off ends by itself in seconds; preempted, it
+            self.agent.preempt_running(f'operator: {reason}')   # left the UAL taking off, the UAV hovering
         deadline = time.monotonic() + STOP_TIMEOUT_S
         while self.agent.running_task() and time.monotonic() < deadline:
             time.sleep(0.05)
