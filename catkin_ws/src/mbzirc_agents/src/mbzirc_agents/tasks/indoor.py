@@ -113,12 +113,21 @@ class SearchIndoor(AgentTask):
         return self._fires(floor)
 
     def _hot(self, seconds: float) -> bool:
-        """Poll the thermal camera's frame filter for up to seconds (it needs > 1 s of hot frames)."""
+        """Poll the thermal camera's frame filter for up to seconds (it needs > 1 s of hot frames).
+
+        A look during which the detector never answered saw nothing: it raises instead of reporting "no
+        fire", so that the search fails and is given again (a UGV whose detector started late under load
+        searched the whole ground floor blind and the floor's fire was never found)."""
         end = self.agent.backend.now() + seconds
+        answered = False
         while self.agent.backend.now() < end:
             self.sleep(0.25)
-            if self.agent.fire_detected():
+            hot = self.agent.fire_detected()
+            answered = answered or hot is not None
+            if hot:
                 return True
+        if not answered:
+            raise TaskError('the thermal camera does not answer (thermal_detection/fire_detected): cannot search')
         return False
 
 

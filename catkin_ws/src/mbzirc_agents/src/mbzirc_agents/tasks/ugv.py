@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+from mbzirc_arena.buildings import in_footprint, standing_at
 from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
@@ -41,10 +42,21 @@ class UgvGoTo(AgentTask):
 
 
 class UgvSearchIndoor(SearchIndoor):
-    """Drive (planned) to the first waypoint - by default outside the door - then straight inside."""
+    """Drive (planned) to the first waypoint - by default outside the door - then straight inside.
+
+    .. note:: A UGV already inside (a second search after the first found nothing) cannot plan to the
+       entrance around the building from within it: it searches the path back the way it came, from its
+       nearest waypoint, since each straight leg of the path can be driven both ways.
+    """
 
     def run(self, ud) -> str:
         path = list(ud.path) or self.default_path()
+        here = self.agent.position()
+        if in_footprint(here, standing_at(here, C.BUILDINGS)):
+            nearest = min(range(len(path)), key=lambda i: math.dist(path[i][0][:2], here[:2]))
+            back = list(reversed(path[:nearest + 1]))
+            self.feedback('GOING', f'already inside: searching back the way in from waypoint {nearest + 1}')
+            return super().run(_UD(ud.floor, back))
         self.feedback('GOING', 'to the entrance')
         self.call_task_or_raise('go_to', {'waypoint': path[0]})
         ud_path = path[1:] if len(path) > 1 else path

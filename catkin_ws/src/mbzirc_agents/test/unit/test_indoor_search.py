@@ -1,0 +1,55 @@
+"""search_indoor against a fake UAL and a scripted thermal camera: a blind look fails the search, and a UGV
+already inside searches back the way it came."""
+import numpy as np
+import pytest
+from mbzirc_comm_objs.msg import SearchIndoorGoal
+from mbzirc_comm_objs.srv import CheckFireResponse
+from uav_abstraction_layer.msg import State
+
+from fake_backend import FakeBackend
+from fake_ual import FakeUal
+from mbzirc_agents import constants as C
+
+
+@pytest.fixture
+def ugv_inside():
+    """The UGV at the last viewpoint of its ground-floor search path, inside the tower."""
+    be = FakeBackend()
+    from mbzirc_agents.ugv_agent import UgvAgent
+    last = C.UGV_INDOOR_PATH[-1]
+    ual = FakeUal(be, pos=(last[0], last[1], 0.0), speedup=8.0)
+    ual.state = State.FLYING_AUTO
+    agent = UgvAgent('0', be, {'region_timeout': 5.0, 'check_fire_time': 1.0})
+    agent.start()
+    deadline = be.clock.now() + 2
+    while agent.pose is None and be.clock.now() < deadline:
+        be.clock.sleep(0.02)
+    yield agent, ual, be
+    be.shutdown = True
+    ual.stop = True
+    agent.shutdown()
+
+
+def search(be, timeout=400):
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=0))
+    return s, s.wait(timeout)
+
+
+def test_a_ugv_already_inside_searches_back_the_way_it_came(ugv_inside):
+    """A second search after the first found nothing (its detector had started late) failed at once three
+    times: 'no path to the entrance around the building' from inside it, and the floor's fire was left."""
+    agent, ual, be = ugv_inside
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    s, outcome = search(be)
+    assert outcome == 'succeeded', s.result.message
+    assert 'no indoor fire found' in s.result.message
+    door = np.array(C.UGV_DOOR_OUTSIDE)
+    assert np.linalg.norm(ual.pos[:2] - door) < 0.6        # out through the door again, the way it came in
+
+
+def test_a_search_whose_thermal_camera_never_answers_fails(ugv_inside):
+    """No CheckFire service (a detector started late under load): the search must not report 'no fire'."""
+    agent, ual, be = ugv_inside
+    s, outcome = search(be)
+    assert outcome == 'aborted' and 'does not answer' in s.result.message, s.result.message
