@@ -53,8 +53,13 @@ class TestReplayPage(unittest.TestCase):
         cls.base = "http://127.0.0.1:%d" % cls.port
         with rosbag.Bag(BAG) as bag:
             cls.start, cls.end = bag.get_start_time(), bag.get_end_time()
-        cls.page = StationPage(cls.base)
-        cls.page.wait_for(lambda s: s["replay"] is not None, 30, "the replay timeline")
+        try:
+            cls.page = StationPage(cls.base)
+            cls.page.wait_for(lambda s: s["replay"] is not None, 30, "the replay timeline")
+        except BaseException:
+            cls.proc.terminate()   # tearDownClass does not run after a failed setUpClass
+            cls.proc.wait(10)
+            raise
 
     @classmethod
     def tearDownClass(cls):
