@@ -123,14 +123,26 @@ class FakeUal:
             self.be.clock.sleep(dt)
 
 
-def start_uav(backend, params=None, speedup=4.0):
-    """A started UavAgent '2' (regions time out after 5 s unless params say otherwise) on a FakeUal, once
-    its first pose arrived: the set-up every UAV task test needs. Returns (agent, ual)."""
-    from mbzirc_agents.uav_agent import UavAgent
-    agent = UavAgent('2', backend, {'region_timeout': 5.0, **(params or {})})
-    ual = FakeUal(backend, speedup=speedup)
+def start_agent(agent, backend):
+    """Start an agent and wait (simulated time) until its first pose arrived; returns the agent."""
     agent.start()
     deadline = backend.clock.now() + 2
     while agent.pose is None and backend.clock.now() < deadline:
         backend.clock.sleep(0.02)
-    return agent, ual
+    return agent
+
+
+def start_uav(backend, params=None, speedup=4.0):
+    """A started UavAgent '2' (regions time out after 5 s unless params say otherwise) on a FakeUal, once
+    its first pose arrived: the set-up every UAV task test needs. Returns (agent, ual)."""
+    from mbzirc_agents.uav_agent import UavAgent
+    ual = FakeUal(backend, speedup=speedup)
+    return start_agent(UavAgent('2', backend, {'region_timeout': 5.0, **(params or {})}), backend), ual
+
+
+def start_ugv(backend, pos, params=None, speedup=8.0):
+    """A started UgvAgent '0' driving (the UAL's FLYING_AUTO) at pos on a FakeUal. Returns (agent, ual)."""
+    from mbzirc_agents.ugv_agent import UgvAgent
+    ual = FakeUal(backend, pos=pos, speedup=speedup)
+    ual.state = State.FLYING_AUTO
+    return start_agent(UgvAgent('0', backend, {'region_timeout': 5.0, **(params or {})}), backend), ual

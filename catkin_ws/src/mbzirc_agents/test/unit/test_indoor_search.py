@@ -4,10 +4,9 @@ import numpy as np
 import pytest
 from mbzirc_comm_objs.msg import SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
-from uav_abstraction_layer.msg import State
 
 from fake_backend import FakeBackend
-from fake_ual import FakeUal
+from fake_ual import start_ugv
 from mbzirc_agents import constants as C
 
 
@@ -15,15 +14,8 @@ from mbzirc_agents import constants as C
 def ugv_inside():
     """The UGV at the last viewpoint of its ground-floor search path, inside the tower."""
     be = FakeBackend()
-    from mbzirc_agents.ugv_agent import UgvAgent
     last = C.UGV_INDOOR_PATH[-1]
-    ual = FakeUal(be, pos=(last[0], last[1], 0.0), speedup=8.0)
-    ual.state = State.FLYING_AUTO
-    agent = UgvAgent('0', be, {'region_timeout': 5.0, 'check_fire_time': 1.0})
-    agent.start()
-    deadline = be.clock.now() + 2
-    while agent.pose is None and be.clock.now() < deadline:
-        be.clock.sleep(0.02)
+    agent, ual = start_ugv(be, (last[0], last[1], 0.0), {'check_fire_time': 1.0})
     yield agent, ual, be
     be.shutdown = True
     ual.stop = True

@@ -281,15 +281,11 @@ def test_state_machine_that_keeps_dying_marks_the_agent_failed(uav):
 
 def _respawned_uav(be, z):
     """A UavAgent '2' started over a FakeUal whose UAV is at height z, with robot 2 holding a region."""
-    from fake_ual import FakeUal
+    from fake_ual import FakeUal, start_agent
     from mbzirc_agents.uav_agent import UavAgent
     ual = FakeUal(be, pos=(7.0, 8.0, z), speedup=8.0)
     ual.regions.ask('2', 'go_to', (5, 5, 0), (10, 10, 8))           # held by the previous run
-    agent = UavAgent('2', be, {'region_timeout': 5.0})
-    agent.start()
-    deadline = be.clock.now() + 2
-    while agent.pose is None and be.clock.now() < deadline:
-        be.clock.sleep(0.02)
+    agent = start_agent(UavAgent('2', be, {'region_timeout': 5.0}), be)
     be.clock.sleep(0.5)
     return agent, ual
 
