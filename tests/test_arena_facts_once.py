@@ -26,13 +26,12 @@ FACT_COPIES = {
     "the floor heights": re.compile(r"FLOOR_(Z|BOUNDS)\s*="),
 }
 FACT_OWNERS = (ARENA, "ual_sim")   # the team's model and the simulator's world
-# /sim/* is ground truth: the simulator serves it, the referee reads it, the launchers record it in a bag
-SIM_READERS = ("ual_sim", "mbzirc_referee", "mbzirc_launchers", "mbzirc_robustness")
+# /sim/* is ground truth: the simulator serves it, the referee reads it, the launchers record it in a bag,
+# the ground station shows the referee's score marked as ground truth (sim only, hidden without a referee)
+SIM_READERS = ("ual_sim", "mbzirc_referee", "mbzirc_launchers", "mbzirc_robustness", "mbzirc_ground_station")
 SIM_TOPIC = re.compile(r"""["'\s(]/sim/""")
 # known leftovers (docs/arena_knowledge.md): package -> what; each must still be there, else drop it here
-KNOWN_LEFTOVERS = {
-    "mbzirc_ground_station": "reads /sim/score and the whole world file, has its own floor rule (built meanwhile)",
-}
+KNOWN_LEFTOVERS: dict = {}
 
 
 def sources():

@@ -1,84 +1,62 @@
-"""The arena as the team knew it before the trial, read from the public part of a world file.
+"""The page's drawing of the arena: what a team knew before the trial, from `mbzirc_arena`.
 
-Only what a team knows goes to the page: arena bounds, floor heights, the building's walls seen from above
-with their windows and doors, the facade fire holders, the outdoor holder places and the robots' homes.
-The world file's `active` entry (which holders burn) and its thermal constants are never read.
+The station shows the team's own knowledge (arena bounds, floors, the buildings' outline with their windows
+and doors, the facade fire holders, the ground fire places, the robots' homes), never the simulator's
+private world (interior walls, which holders burn): it reads the world file through `mbzirc_arena`, which
+reads only the public part.
 """
 from __future__ import annotations
 
-import math
-from typing import Any, Optional
+from typing import Optional
 
-import yaml
+from mbzirc_arena.arena import Arena, ArenaError, load_arena as load_public_arena
+from mbzirc_arena.c3 import ARENA as DEFAULT_ARENA
 
-__all__ = ["ArenaError", "arena_from_yaml", "load_arena"]
+__all__ = ["ArenaError", "page_arena", "load_arena"]
 
-
-class ArenaError(ValueError):
-    """A world file that cannot be drawn; the message says which entry and why."""
+WALL = 0.2   # m: drawn thickness of an outer wall
 
 
-def _vec(entry: dict, key: str, n: int) -> list[float]:
-    v = entry.get(key)
-    if not isinstance(v, (list, tuple)) or len(v) != n:
-        raise ArenaError("%s: %r needs %d numbers" % (entry.get("name", entry.get("id", "?")), key, n))
-    out = [float(x) for x in v]
-    if not all(math.isfinite(x) for x in out):
-        raise ArenaError("%s: %r is not finite" % (entry.get("name", entry.get("id", "?")), key))
-    return out
+def _outline(name: str, box: tuple) -> list:
+    """The four outer walls of a building as thin rectangles (x, y, z min and max)."""
+    x0, y0, z0, x1, y1, z1 = box
+    return [{"name": "%s_%s" % (name, side), "min": list(lo), "max": list(hi), "inner": False, "openings": []}
+            for side, lo, hi in (("south", (x0, y0, z0), (x1, y0 + WALL, z1)),
+                                 ("north", (x0, y1 - WALL, z0), (x1, y1, z1)),
+                                 ("west", (x0, y0, z0), (x0 + WALL, y1, z1)),
+                                 ("east", (x1 - WALL, y0, z0), (x1, y1, z1)))]
 
 
-def _openings(wall: dict, lo: list[float], hi: list[float]) -> list[dict]:
-    """Windows and doors of a wall as segments on the map (a door reaches the floor of its level)."""
-    along_x = (hi[0] - lo[0]) >= (hi[1] - lo[1])
-    out = []
-    for o in wall.get("openings") or []:
-        a0, a1 = (float(x) for x in o["along"])
-        z0, z1 = (float(x) for x in o["z"])
-        if along_x:
-            y = (lo[1] + hi[1]) / 2
-            seg = [a0, y, a1, y]
-        else:
-            x = (lo[0] + hi[0]) / 2
-            seg = [x, a0, x, a1]
-        door = any(abs(z0 - f) < 0.05 for f in (0.0, 5.0, 10.0)) and (z1 - z0) < 2.6 and z0 < 0.05
-        out.append({"seg": [round(v, 3) for v in seg], "z": [z0, z1], "door": bool(door)})
-    return out
+def _opening(o) -> dict:
+    """A window or door as a segment on the map: its width along the wall, across the wall's normal."""
+    (cx, cy, cz), (nx, ny) = o.centre, o.normal
+    ax, ay = -ny * o.width / 2, nx * o.width / 2
+    seg = [cx - ax, cy - ay, cx + ax, cy + ay]
+    return {"seg": [round(v, 3) for v in seg], "z": [cz - o.height / 2, cz + o.height / 2],
+            "door": o.kind == "door"}
 
 
-def arena_from_yaml(doc: dict) -> dict:
-    """The page's arena description (plain JSON data) from a parsed world file."""
-    if not isinstance(doc, dict) or "arena" not in doc:
-        raise ArenaError("not a world file: no 'arena' entry")
-    bounds = doc["arena"]
-    arena_min, arena_max = _vec(bounds, "min", 3), _vec(bounds, "max", 3)
-    walls = []
-    for w in doc.get("walls") or []:
-        lo, hi = _vec(w, "min", 3), _vec(w, "max", 3)
-        walls.append({"name": str(w.get("name", "")), "min": lo, "max": hi,
-                      "inner": str(w.get("name", "")).startswith("inner"), "openings": _openings(w, lo, hi)})
-    boxes = [{"name": str(b.get("name", "")), "min": _vec(b, "min", 3), "max": _vec(b, "max", 3)}
-             for b in doc.get("boxes") or []]
-    facade = [{"id": str(h["id"]), "position": _vec(h, "position", 3), "normal": _vec(h, "normal", 3)}
-              for h in doc.get("facade_holders") or []]
-    ground = [{"id": str(h["id"]), "position": _vec(h, "position", 3)} for h in doc.get("ground_holders") or []]
-    homes = [{"id": str(r["id"]), "kind": str(r.get("kind", "uav")), "payload": str(r.get("payload", "")),
-              "home": _vec(r, "home", 3)} for r in doc.get("robots") or []]
-    floors = [float(f) for f in doc.get("floors") or [0.0, 5.0, 10.0]]
-    return {"name": str(doc.get("name", "")), "min": arena_min, "max": arena_max, "floors": floors,
-            "walls": walls, "boxes": boxes, "facade_holders": facade, "ground_holders": ground, "homes": homes}
+def page_arena(arena: Arena, name: str = "") -> dict:
+    """The page's arena description (plain JSON data) of the team's arena model."""
+    walls, boxes = [], []
+    for b in arena.buildings:
+        outline = _outline(b.name, b.box)
+        outline[0]["openings"] = [_opening(o) for o in arena.openings if o.building == b.name]
+        walls += outline
+        boxes.append({"name": "%s_roof" % b.name, "min": list(b.box[:3]), "max": list(b.box[3:])})
+    bounds = list(arena.bounds)
+    return {"name": name, "min": bounds[:3], "max": bounds[3:], "floors": list(arena.floor_heights),
+            "walls": walls, "boxes": boxes,
+            "facade_holders": [{"id": h.id, "position": list(h.position), "normal": list(h.normal)}
+                               for h in arena.facade_holders],
+            "ground_holders": [{"id": "g_%d" % i, "position": list(p)}
+                               for i, p in enumerate(arena.ground_fire_places)],
+            "homes": [{"id": str(h.robot_id), "kind": h.kind, "payload": h.payload, "home": list(h.position)}
+                      for h in arena.homes]}
 
 
-def load_arena(path: str) -> dict:
-    """Read a world file (yaml) and return :func:`arena_from_yaml` of it."""
-    try:
-        with open(path, "r", encoding="utf-8") as f:
-            doc: Optional[Any] = yaml.safe_load(f)
-    except (OSError, yaml.YAMLError) as ex:
-        raise ArenaError("cannot read world file %s: %s" % (path, ex)) from ex
-    try:
-        return arena_from_yaml(doc)  # type: ignore[arg-type]
-    except (KeyError, TypeError, ValueError) as ex:
-        if isinstance(ex, ArenaError):
-            raise
-        raise ArenaError("world file %s: %s" % (path, ex)) from ex
+def load_arena(path: Optional[str]) -> dict:
+    """The page's arena from a world file's public part, or the default C3 arena when no path is given."""
+    if not path:
+        return page_arena(DEFAULT_ARENA, "c3_default")
+    return page_arena(load_public_arena(path))

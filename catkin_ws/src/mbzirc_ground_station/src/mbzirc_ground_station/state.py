@@ -12,6 +12,9 @@ import math
 from collections import deque
 from typing import Any, Iterable, Optional
 
+from mbzirc_arena.arena import floor_of
+from mbzirc_arena.c3 import ARENA as DEFAULT_ARENA
+
 from .constants import FIRE_KIND, FIRE_STATUS, GOAL_STATUS, LINK_LATE_S, STALE_AFTER, UAL_STATES, UGV_ID
 from .routing import Route, route
 from .summary import finite, point_of, summarise
@@ -245,7 +248,7 @@ class GroundStationState:
         fires = []
         for o in msg.objects:
             xyz = point_of(o.pose)
-            floor = self._floor_of(xyz[2]) if xyz else None
+            floor = floor_of(xyz[2], self.floor_heights) if xyz else None
             kind = FIRE_KIND.get(int(o.sub_type), "unknown")
             if kind == "ground":
                 floor = 0
@@ -260,9 +263,10 @@ class GroundStationState:
                              % (f["id"], f["kind"], "?" if f["floor"] is None else f["floor"], f["status"]))
         self.fires, self.fires_t = fires, now
 
-    def _floor_of(self, z: float) -> int:
-        floors = (self.arena or {}).get("floors") or [0.0, 5.0, 10.0]
-        return max([i for i, fz in enumerate(floors) if z >= fz - 0.5] or [0])
+    @property
+    def floor_heights(self) -> list:
+        """The floors of the arena drawn (the default C3 arena's when none is)."""
+        return (self.arena or {}).get("floors") or list(DEFAULT_ARENA.floor_heights)
 
     def _on_regions(self, r: Route, msg: Any, now: float) -> None:
         for m in msg.markers:

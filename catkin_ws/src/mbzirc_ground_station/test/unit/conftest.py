@@ -1,5 +1,7 @@
-"""Lets the unit tests import the package from src/ without a catkin build."""
+"""Lets the unit tests import the package (and mbzirc_arena, the arena model it draws) from the source trees
+without a catkin build."""
 import os
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "src"))
+_SRC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..")
+sys.path[:0] = [os.path.join(_SRC, pkg, "src") for pkg in ("mbzirc_ground_station", "mbzirc_arena")]
