@@ -47,15 +47,19 @@ class AgentInterface:
                 self._demand_subs.setdefault(task_name, []).extend(subs)
 
     def pop_active(self, task_name: str) -> None:
-        """A task ends: its callbacks stop receiving, its demands close."""
+        """A task ends: its callbacks stop receiving, its demands close.
+
+        The demands are closed in a thread of their own: unregistering a subscriber tells the ROS master,
+        with no time bound, and a robot whose link is cut cannot reach it. Done in the state machine's
+        thread, that call held the task's end for good, so a permanently cut UAV never went home (fault
+        suite, a cut during extinguish_facade_fire)."""
         with self._lock:
             if task_name in self._active:
                 self._active.remove(task_name)
             subs = self._demand_subs.pop(task_name, [])
-        for _topic, sub in subs:
-            unregister = getattr(sub, 'unregister', None)
-            if unregister is not None:
-                unregister()
+        unregisters = [u for u in (getattr(sub, 'unregister', None) for _topic, sub in subs) if u is not None]
+        if unregisters:
+            self.backend.start_thread(f'{task_name}: closing demands', lambda: [u() for u in unregisters])
 
     def add_demand(self, task_name: str, topic: str, msg_type: Any) -> None:
         """Subscribe to topic only while task_name runs, to switch on a lazy producer.

@@ -243,9 +243,36 @@ def test_demand_subscribes_only_while_the_task_runs():
     assert made == ['circle_detection/middle_hole']
     assert iface.demanded_topics() == ['circle_detection/middle_hole']
     iface.pop_active('centre')
-    assert dropped == ['circle_detection/middle_hole'] and iface.demanded_topics() == []
+    assert iface.demanded_topics() == []
+    be.clock.sleep(0.1)                    # the demand is closed in a thread of its own
+    assert dropped == ['circle_detection/middle_hole']
     iface.push_active('centre')            # a second run subscribes again
     assert made == ['circle_detection/middle_hole'] * 2
+
+
+def test_a_task_ends_even_when_closing_its_demand_hangs():
+    """Unregistering tells the ROS master, which a robot whose link is cut cannot reach: the call hangs. The
+    task must end all the same (a permanently cut UAV stayed in extinguish_facade_fire and never went home)."""
+    import threading
+    release = threading.Event()
+
+    class HangingSub:
+        def unregister(self):
+            release.wait()                 # the master never answers (a real thread: not the sim clock's)
+
+    be = FakeBackend()
+    be.subscriber = lambda topic, msg_type, cb: HangingSub()
+    be.start_thread = lambda name, target: threading.Thread(target=target, name=name, daemon=True).start()
+    iface = AgentInterface(be)
+    iface.add_demand('centre', 'circle_detection/middle_hole', object)
+    iface.push_active('centre')
+    done = threading.Event()
+    threading.Thread(target=lambda: (iface.pop_active('centre'), done.set()), daemon=True).start()
+    try:
+        assert done.wait(2.0), 'pop_active waited for the master'
+        assert iface.demanded_topics() == [] and 'centre' not in iface.active_tasks()
+    finally:
+        release.set()
 
 
 def test_demand_that_cannot_subscribe_is_logged():
