@@ -310,6 +310,8 @@ class CentralUnit:
                 "doing": (cmd.reason if cmd else "idle"),
                 "feedback": self.feedback.get(i, ""),
                 "water": round(a.water_level, 2) if a else 0.0,
+                "kind": a.robot_type if a else "",
+                "payload": a.payload if a else "",
                 "pos": [round(v, 1) for v in a.position] if a else None,
             }
         fires = [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "status": f.status}

@@ -268,6 +268,19 @@ def _owner(status: dict[str, Any], floor: str) -> Optional[str]:
     return None if v is None else str(v)
 
 
+def _could_take(agent: dict[str, Any]) -> bool:
+    """True when a robot of this status could take a released floor now: alive, idle, and a water UAV (a
+    status without kind and payload, as older ones, counts as one)."""
+    return (bool(agent.get("alive")) and not agent.get("task") and agent.get("kind", "uav") == "uav"
+            and agent.get("payload", "water") == "water")
+
+
+def _free_taker(statuses: list[dict[str, Any]]) -> bool:
+    """True when some robot could have taken a released floor in one of these statuses (see _could_take),
+    owning no floor itself."""
+    return any(_could_take(a) and not _owned(s, r) for s in statuses for r, a in (s.get("agents") or {}).items())
+
+
 def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t_cut: float,
                       t_restore: Optional[float], max_gap_s: float = 15.0,
                       central_unit_kills: Iterable[float] = (), t_end: Optional[float] = None,
@@ -284,8 +297,10 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
     ``t_end``: sim time the watching ended (default: the last status). The silence between the last status
     and then counts as a gap: a central unit that sent one status after the cut and went silent failed.
     A floor released while the robot was silent must be taken again (by any robot) within
-    ``retake_within_s`` of its release, unless every fire of the status is put out or the watching ended
-    first: released and never retaken is work dropped, not reassigned.
+    ``retake_within_s`` of its release, unless every fire of the status is put out, the watching ended
+    first, or no robot could have taken it meanwhile (every living water UAV busy with a floor of its own:
+    the one water UAV left works the floors one after the other): released and never retaken while a
+    robot was free to take it is work dropped, not reassigned.
     """
     robot = str(robot)
     before = [s for t, s in history if t <= t_cut]
@@ -320,6 +335,8 @@ def evaluate_link_cut(history: list[tuple[float, dict[str, Any]]], robot: str, t
                 retakes[fl] = round(retaken - t_rel, 1)
             elif _all_fires_out(after[-1][1]) or horizon - t_rel < retake_within_s:
                 reassigned.append(fl)  # nothing left to do there, or too little time watched to tell
+            elif not _free_taker([s for t, s in after if t_rel <= t <= t_rel + retake_within_s]):
+                kept.append(fl)        # no robot could take it in time: not the central unit's fault
             else:
                 dropped.append(fl)
         elif not free:

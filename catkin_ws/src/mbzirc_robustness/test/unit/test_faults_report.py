@@ -243,6 +243,26 @@ def test_floor_released_and_never_retaken_fails():
     assert r2["survived"] and r2["floors_reassigned"] == ["f2"], r2
 
 
+def test_floor_released_while_the_only_water_uav_left_works_another_floor_is_kept():
+    """The one water UAV left (3) takes the floor priority's first floor (2) and the released floor 0 waits
+    its turn; the UGV (0) and the blanket UAV (1), idle, cannot take a facade floor (a fault-suite run
+    failed here although no robot could have taken it)."""
+    agents = lambda t: {"2": False, "3": True, "0": True, "1": True}
+    h = [status(10, {"2": True, "3": True, "0": True, "1": True}, {"0": "2", "2": "3"}, tasks={"3": "x"})] + \
+        [status(t, agents(t), {"2": "3"}, tasks={"3": "x"}) for t in range(26, 200, 10)]
+    for s in h:
+        for r, kind, payload in (("0", "ugv", "water"), ("1", "uav", "blanket"), ("2", "uav", "water"),
+                                 ("3", "uav", "water")):
+            s[1]["agents"][r].update(kind=kind, payload=payload)
+    r = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=None, t_end=200)
+    assert r["survived"] and r["floors_kept_no_free_robot"] == ["f0"], r
+    for s in h[3:]:                              # the water UAV left idle and owning nothing: dropped
+        s[1]["agents"]["3"]["task"] = ""
+        s[1]["floor_owner"] = {}
+    r2 = F.evaluate_link_cut(h, "2", t_cut=20, t_restore=None, t_end=200)
+    assert not r2["survived"] and r2["floors_released_not_retaken"] == ["f0"], r2
+
+
 def test_central_unit_restart_must_decide_again():
     before = [status(t, {"1": True}, {"1": "1"}, tasks={"1": "a"}) for t in (100, 110)]
     one_then_silent = before + [status(130, {"1": True}, {"1": "1"})]
