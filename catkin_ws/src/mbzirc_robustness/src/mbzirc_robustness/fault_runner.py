@@ -262,11 +262,13 @@ class FaultSuite:
         from mbzirc_robustness.graph import query_pid
         return query_pid(rosgraph.Master("/robustness_faults"), node, "/robustness_faults", timeout=2.0)
 
-    def _bus_inputs(self, node: str) -> set[str]:
+    def _bus_info(self, node: str) -> list:
         import rosgraph
         from mbzirc_robustness.graph import query_bus_info
-        return F.connected_inputs(query_bus_info(rosgraph.Master("/robustness_faults"), node,
-                                                 "/robustness_faults", timeout=2.0))
+        return query_bus_info(rosgraph.Master("/robustness_faults"), node, "/robustness_faults", timeout=2.0)
+
+    def _bus_inputs(self, node: str) -> set[str]:
+        return F.connected_inputs(self._bus_info(node))
 
     def _check_fire_answers(self, node: str) -> bool:
         """The fire detector's CheckFire service (in its namespace) answers."""
@@ -368,7 +370,8 @@ class FaultSuite:
             v = F.compare_regions(regions_before, after)
             return v["same"], v
         if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS):
-            v = F.judge_io_restored(inputs_before, self._bus_inputs(f.target))
+            info = self._bus_info(f.target)
+            v = F.judge_io_restored(inputs_before, F.connected_inputs(info), bool(F.connected_outputs(info)) or not info)
             if f.check == F.CHECK_DETECTIONS:
                 v["check_fire_answers"] = self._check_fire_answers(f.target)
                 if not v["check_fire_answers"]:

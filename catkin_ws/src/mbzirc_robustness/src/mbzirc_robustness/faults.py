@@ -191,12 +191,20 @@ def connected_inputs(bus_info: list) -> set[str]:
     return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] in ("i", "b") and e[4] != "/clock"}
 
 
-def judge_io_restored(before: set[str], after: set[str]) -> dict[str, Any]:
+def connected_outputs(bus_info: list) -> set[str]:
+    """Topics a node sends to at least one subscriber, from its ``getBusInfo`` answer (/rosout aside)."""
+    return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] == "o" and e[4] != "/rosout"}
+
+
+def judge_io_restored(before: set[str], after: set[str], outputs_wanted: bool = True) -> dict[str, Any]:
     """Verdict on a restarted node's wiring: every topic it received before the kill it receives again (a
-    new process that subscribed to nothing, or whose publishers never connected, does no work)."""
-    missing = sorted(before - after)
-    return {"ok": not missing, "inputs_before": sorted(before), "inputs_missing": missing,
-            "detail": f"inputs not connected again: {missing}" if missing else "every input connected again"}
+    new process that subscribed to nothing, or whose publishers never connected, does no work), while
+    something subscribes to its outputs: a lazy node (circle_detector ~lazy) rightly leaves its inputs
+    unconnected until a task demands its output (a run failed it after the demanding task had ended)."""
+    missing = sorted(before - after) if outputs_wanted else []
+    detail = (f"inputs not connected again: {missing}" if missing else "every input connected again"
+              if outputs_wanted else "nothing subscribes to its outputs: a lazy node waits for demand")
+    return {"ok": not missing, "inputs_before": sorted(before), "inputs_missing": missing, "detail": detail}
 
 
 def judge_working(feeds_after: list[tuple[float, str]], history: list[tuple[float, dict[str, Any]]], robot: str,

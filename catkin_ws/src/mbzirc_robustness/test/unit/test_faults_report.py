@@ -334,3 +334,13 @@ def test_resumed_regions_are_read_from_the_managers_log():
     assert F.compare_regions({"1/go_to", "2/hold"}, got)["same"]
     assert not F.compare_regions({"1/go_to", "4/x"}, got)["same"]
     assert F.resumed_regions(lines, datetime(2026, 11, 24, 2, 18, 0)) is None
+
+
+def test_a_lazy_node_without_demand_may_leave_its_inputs_unconnected():
+    """A respawned circle detector (~lazy) subscribes to its cameras only while a task demands holes: with no
+    subscriber on its outputs, unconnected inputs are its design; with one, they are a failure."""
+    before = {"/cam/image", "/cam/depth"}
+    assert F.judge_io_restored(before, set(), outputs_wanted=False)["ok"]
+    assert not F.judge_io_restored(before, set(), outputs_wanted=True)["ok"]
+    bus = [[1, "/agent", "o", "TCPROS", "/x/middle_hole", 1, ""], [2, "/rosout", "o", "TCPROS", "/rosout", 1, ""]]
+    assert F.connected_outputs(bus) == {"/x/middle_hole"} and F.connected_outputs(bus[1:]) == set()
