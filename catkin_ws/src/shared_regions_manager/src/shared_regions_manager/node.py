@@ -110,7 +110,7 @@ class RegionManagerNode:
                                          f'this mission: {why}')
         rospy.logdebug(f'ask_for_region {req.agent_id}/{req.label}: {why}')
         if ok:
-            self.save()
+            self.changed()
         return AskForRegionResponse(success=ok)
 
     def on_free(self, req: FreeRegions._request_class) -> FreeRegionsResponse:
@@ -119,8 +119,15 @@ class RegionManagerNode:
         if not ok and 'may not' in why:
             rospy.logerr_throttle(5.0, f'free_regions refused: {why}')
         if ok:
-            self.save()
+            self.changed()
         return FreeRegionsResponse(success=ok)
+
+    def changed(self) -> None:
+        """The table changed: save it, and show it at once (the markers are then the table as it is, not as
+        it was up to a second ago: the fault suite compares the last ones before a kill with what resumed)."""
+        self.save()
+        if self.markers is not None:
+            self.publish_markers()
 
     def on_timer(self, _event=None) -> None:
         """Expire the leases of unknown agents; publish the markers."""
