@@ -371,7 +371,9 @@ class FaultSuite:
             return v["same"], v
         if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS):
             info = self._bus_info(f.target)
-            v = F.judge_io_restored(inputs_before, F.connected_inputs(info), bool(F.connected_outputs(info)) or not info)
+            always_on = F.LAZY_NODES.get(f.target.rsplit("/", 1)[-1])
+            wanted = always_on is None or not info or bool(F.connected_outputs(info, always_on))
+            v = F.judge_io_restored(inputs_before, F.connected_inputs(info), wanted)
             if f.check == F.CHECK_DETECTIONS:
                 v["check_fire_answers"] = self._check_fire_answers(f.target)
                 if not v["check_fire_answers"]:

@@ -191,9 +191,14 @@ def connected_inputs(bus_info: list) -> set[str]:
     return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] in ("i", "b") and e[4] != "/clock"}
 
 
-def connected_outputs(bus_info: list) -> set[str]:
-    """Topics a node sends to at least one subscriber, from its ``getBusInfo`` answer (/rosout aside)."""
-    return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] == "o" and e[4] != "/rosout"}
+def connected_outputs(bus_info: list, always_on: tuple = ("/rosout",)) -> set[str]:
+    """Topics a node sends to at least one subscriber, from its ``getBusInfo`` answer; topics ending with one
+    of ``always_on`` aside (a lazy node's always-subscribed outputs, e.g. sensed_objects, are no demand)."""
+    return {str(e[4]) for e in bus_info if len(e) >= 5 and e[2] == "o"
+            and not any(str(e[4]).endswith(a) for a in always_on)}
+
+
+LAZY_NODES = {"circle_detector": ("/rosout", "/sensed_objects")}   # node name -> outputs that are no demand
 
 
 def judge_io_restored(before: set[str], after: set[str], outputs_wanted: bool = True) -> dict[str, Any]:

@@ -344,3 +344,7 @@ def test_a_lazy_node_without_demand_may_leave_its_inputs_unconnected():
     assert not F.judge_io_restored(before, set(), outputs_wanted=True)["ok"]
     bus = [[1, "/agent", "o", "TCPROS", "/x/middle_hole", 1, ""], [2, "/rosout", "o", "TCPROS", "/rosout", 1, ""]]
     assert F.connected_outputs(bus) == {"/x/middle_hole"} and F.connected_outputs(bus[1:]) == set()
+    always_on = F.LAZY_NODES["circle_detector"]
+    objects = [[3, "/object_estimator", "o", "TCPROS", "/x/sensed_objects", 1, ""]]
+    assert F.connected_outputs(objects + bus[1:], always_on) == set()
+    assert F.connected_outputs(objects + bus, always_on) == {"/x/middle_hole"}
