@@ -58,20 +58,22 @@ class Scene:
     def _loop(self):
         while not self.stop:
             subs = self.be.subs
-            if 'sensed_objects' in subs and self.circles is not None:
+            circles = self.circles                  # read once: the test swaps it while this thread runs
+            if 'sensed_objects' in subs and circles is not None:
                 pose = np.r_[self.ual.pos, self.ual.yaw]
                 subs['sensed_objects'](ObjectDetectionList(
-                    objects=[optical_detection(w, o, pose) for w, o in self.circles]))
+                    objects=[optical_detection(w, o, pose) for w, o in circles]))
             elif 'sensed_objects' in subs:
                 d = ObjectDetection(type=C.TYPE_HOLE)
                 d.header.frame_id = 'arena'
                 d.pose.pose.position.x, d.pose.pose.position.y, d.pose.pose.position.z = self.hole
                 d.scale.x = 0.15
                 subs['sensed_objects'](ObjectDetectionList(objects=[d]))
-            if 'scan' in subs and self.wall is not None:
+            wall = self.wall
+            if 'scan' in subs and wall is not None:
                 inc = 2 * math.pi / 720
                 a = -math.pi + inc * np.arange(720)
-                r = np.where(np.abs(a) < 1.2, self.wall / np.maximum(np.cos(a), 1e-3), np.inf)
+                r = np.where(np.abs(a) < 1.2, wall / np.maximum(np.cos(a), 1e-3), np.inf)
                 subs['scan'](LaserScan(angle_min=-math.pi, angle_increment=inc, ranges=list(r)))
             self.be.clock.sleep(0.1)
 
