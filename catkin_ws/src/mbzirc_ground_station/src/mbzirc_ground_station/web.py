@@ -12,11 +12,11 @@ import os
 import socket
 import threading
 import time
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import ThreadingHTTPServer
 from typing import Callable, Optional, Protocol
 from urllib.parse import urlparse
 
-from .http_checks import allowed_hosts, check_host_origin, parse_json_body
+from mbzirc_ros_utils.local_http import JsonRequestHandler, SameSitePolicy
 
 __all__ = ["FrameSource", "GroundStationServer", "PAGE_PATH"]
 
@@ -70,7 +70,7 @@ class GroundStationServer:
             self._page = f.read()
         self.httpd = _Server((host, port), self._make_handler())
         self.httpd.daemon_threads = True
-        self.allowed = allowed_hosts(host, self.port, allowed_extra)
+        self.policy = SameSitePolicy(host, self.port, allowed_extra)
         self._threads: list[threading.Thread] = []
 
     @property
@@ -131,74 +131,52 @@ class GroundStationServer:
     def _make_handler(self) -> type:
         server = self
 
-        class Handler(BaseHTTPRequestHandler):
+        class Handler(JsonRequestHandler):
             server_version = "mbzirc_ground_station/1"
-            protocol_version = "HTTP/1.1"
             timeout = SOCKET_TIMEOUT_S   # a page that stops reading is dropped, its thread freed
 
-            def log_message(self, fmt: str, *args: object) -> None:  # quiet
-                pass
-
-            def _send(self, code: int, body: bytes, ctype: str) -> None:
-                self.send_response(code)
-                self.send_header("Content-Type", ctype)
-                self.send_header("Content-Length", str(len(body)))
-                self.send_header("Cache-Control", "no-store")
-                self.send_header("X-Content-Type-Options", "nosniff")
-                self.send_header("X-Frame-Options", "DENY")
-                self.end_headers()
-                self.wfile.write(body)
-
-            def _json(self, code: int, obj: object) -> None:
-                self._send(code, json.dumps(obj).encode("utf-8"), "application/json")
-
-            def _allowed(self) -> bool:
-                why = check_host_origin(self.headers.get("Host"), self.headers.get("Origin"), server.allowed)
-                if why:
-                    self._json(403, {"error": why})
-                return not why
+            @property
+            def policy(self) -> SameSitePolicy:   # made once the port is bound
+                return server.policy
 
             def do_GET(self) -> None:  # noqa: N802
-                if not self._allowed():
+                if self.refused():
                     return
                 path = urlparse(self.path).path
                 if path in ("/", "/index.html"):
-                    self._send(200, server._page, "text/html; charset=utf-8")
+                    self.send_body(200, server._page, "text/html; charset=utf-8")
                 elif path == "/api/state":
-                    self._send(200, server._build(True), "application/json")
+                    self.send_body(200, server._build(True), "application/json")
                 elif path == "/api/info":
-                    self._json(200, server.info)
+                    self.send_json(200, server.info)
                 elif path == "/api/events":
                     self._events()
                 else:
-                    self._json(404, {"error": "not found"})
+                    self.send_json(404, {"error": "not found"})
 
             def do_POST(self) -> None:  # noqa: N802
-                if not self._allowed():
+                if self.refused():
                     return
                 path = urlparse(self.path).path
                 if path not in ("/api/command", "/api/replay"):
-                    self._json(404, {"error": "not found"})
+                    self.send_json(404, {"error": "not found"})
                     return
-                req, why = parse_json_body(self.headers.get("Content-Type"), self.headers.get("Content-Length"),
-                                           self.rfile.read)
+                req = self.read_json()
                 if req is None:
-                    self.close_connection = True
-                    self._json(415 if "Content-Type" in why else 400, {"error": why})
                     return
                 if path == "/api/command":
                     if server.command is None:
-                        self._json(409, {"error": "no commands in replay"})
+                        self.send_json(409, {"error": "no commands in replay"})
                         return
                     code, reply = server.command(req)
-                    self._json(code, reply)
+                    self.send_json(code, reply)
                     return
                 control = getattr(server.source, "control", None)
                 if control is None:
-                    self._json(409, {"error": "not a replay"})
+                    self.send_json(409, {"error": "not a replay"})
                     return
                 ok, why = control(req)
-                self._json(200 if ok else 400, {"ok": ok, "error": why} if not ok else {"ok": True})
+                self.send_json(200 if ok else 400, {"ok": ok, "error": why} if not ok else {"ok": True})
 
             def _events(self) -> None:
                 with server._cond:
@@ -208,17 +186,12 @@ class GroundStationServer:
                         busy = False
                         server.clients += 1
                 if busy:
-                    self._json(503, {"error": "too many pages open"})
+                    self.send_json(503, {"error": "too many pages open"})
                     return
                 try:
                     # a small send buffer: a page that reads slowly gets fresh frames late, not a queue of old ones
                     self.connection.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SSE_SEND_BUFFER)
-                    self.send_response(200)
-                    self.send_header("Content-Type", "text/event-stream")
-                    self.send_header("Cache-Control", "no-store")
-                    self.send_header("Connection", "close")
-                    self.end_headers()
-                    self.close_connection = True
+                    self.start_event_stream()
                     self.wfile.write(("retry: %d\nevent: info\ndata: %s\n\n"
                                       % (SSE_RETRY_MS, json.dumps(server.info))).encode("utf-8"))
                     seq = server._seq
