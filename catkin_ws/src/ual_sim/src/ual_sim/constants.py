@@ -80,6 +80,16 @@ LASER_RANGE_MAX = 25.0
 LASER_RATE = 10.0          # Hz
 LASER_OFFSET = (0.0, 0.0, 0.1)   # base_link -> laser_link
 
+# --- downward altimeter (laser rangefinder, Garmin LIDAR-Lite v3HP class; sources: README "Altimeter") ---
+ALTIMETER_RATE = 20.0          # Hz published (the sensor ranges at up to 1 kHz; a 10 Hz controller needs 20)
+ALTIMETER_RANGE_MIN = 0.05     # m: below it the reading is -inf (landed)
+ALTIMETER_RANGE_MAX = 40.0     # m: beyond it +inf (no return)
+ALTIMETER_FOV = 0.008          # rad: beam divergence
+ALTIMETER_NEAR_LIMIT = 2.0     # m: under it the datasheet's accuracy is the coarser one
+ALTIMETER_NOISE_NEAR = 0.05    # m std under ALTIMETER_NEAR_LIMIT (not under `ideal`)
+ALTIMETER_NOISE_FAR = 0.025    # m std from ALTIMETER_NEAR_LIMIT on (not under `ideal`)
+ALTIMETER_DROPOUT_RATE = 0.01  # share of invalid (NaN) readings (not under `ideal`)
+
 # --- RGB-D (RealSense D435i) ---
 CAM_WIDTH = 640
 CAM_HEIGHT = 480

@@ -14,6 +14,7 @@ from typing import Optional
 import numpy as np
 
 from . import constants as C
+from .altimeter import altimeter_reading
 from .effects import JetResult, shoot
 from .fires import FireSet
 from .rgbd import RGBDCamera
@@ -73,6 +74,9 @@ class Simulation:
         self.thermal = {FORWARD: ThermalCamera(FORWARD), DOWNWARD: ThermalCamera(DOWNWARD)}
         self.rgbd = RGBDCamera()
         self._cache: dict = {}   # (robot id, sensor) -> (key, frame): a robot that did not move sees the same
+        # the altimeters' noise (any profile but `ideal`): a generator of their own, so that a seed's other
+        # draws do not depend on who listens to the altimeters
+        self.altimeter_rng = None if self.uncertainty is None else np.random.default_rng([int(seed), 23])
 
     # ------------------------------------------------------------------ stepping
     def step(self, dt: float) -> None:
@@ -107,9 +111,11 @@ class Simulation:
         self._collisions()
 
     def _follow_gnss_bias(self, dt: float) -> None:
-        """Every robot's GNSS bias wanders; a controller that holds or flies to a set-point in the reported
-        frame moves its true set-point by minus that change (a landing keeps its height, the UGV its z)."""
-        for rid, delta in self.uncertainty.step_gnss(dt).items():
+        """Every robot's reported-position error changes (the GNSS bias wanders; indoors without GNSS the
+        dead reckoning drifts); a controller that holds or flies to a set-point in the reported frame moves
+        its true set-point by minus that change (a landing keeps its height, the UGV its z)."""
+        motion = {rid: (r.pos, r.vel) for rid, r in self.robots.items()}
+        for rid, delta in self.uncertainty.step_gnss(dt, motion).items():
             r = self.robots[rid]
             r.gnss_bias = self.uncertainty.gnss_bias(rid).copy()
             if r.crashed:
@@ -221,6 +227,10 @@ class Simulation:
             p[:3] += self.uncertainty.gnss_fix(r.id)   # GNSS error (a crashed robot's receiver still reports)
         return p
 
+    def gnss_valid(self, r: Robot) -> bool:
+        """Whether the robot's reported pose follows a GNSS fix now (False indoors with `denied_indoors`)."""
+        return self.uncertainty is None or self.uncertainty.gnss_valid(r.id)
+
     def _cached(self, r: Robot, sensor: str, fn):
         """Reuse the last frame of this sensor while the robot's pose and the fires are unchanged."""
         key = (r.pos[0], r.pos[1], r.pos[2], r.yaw, self.fires.version)
@@ -237,6 +247,12 @@ class Simulation:
         if self.uncertainty is None:
             return clean
         return self.uncertainty.scan(clean, C.LASER_RANGE_MIN, C.LASER_RANGE_MAX)
+
+    def altimeter(self, r: Robot) -> float:
+        """The downward altimeter's reading (altimeter.py): the TRUE height of base_link above the surface
+        below (the highest box top under it, else the ground), with the sensor's noise unless `ideal`."""
+        height = r.pos[2] - self.world.support_height(r.pos[0], r.pos[1], r.pos[2])
+        return altimeter_reading(height, self.altimeter_rng)
 
     def thermal_frame(self, r: Robot, direction: int) -> np.ndarray:
         cam = self.thermal[direction]
