@@ -1,11 +1,16 @@
 #!/usr/bin/env python3
 """rostest: the live page in headless Chromium during a short simulated trial.
 
+- the robots wait for the start (the central unit's ~wait_for_start): the page shows "waiting for start",
+  no robot gets a task and every UAV stays on the ground; Start trial (confirmed on the page) starts the
+  work: the central unit's status says started, robots get tasks, a UAV takes off;
 - the robots move on the map as the simulator moves them: each marker, converted back from canvas pixels to
   metres, is within 0.5 m of the simulator's ground truth (/sim/robots, interpolated at the sim time of the
   pose the page shows: at 4x real time a 10 Hz page is up to 0.4 sim seconds behind, 0.6 m at 1.6 m/s);
 - the fire list shows the statuses the estimator publishes, and follows them when they change;
-- the Home button of a UAV (confirmed on the page) brings it home: it lands within 1.5 m of its home;
+- the Home button of a UAV (confirmed on the page) brings it home: it lands within 1.5 m of its home; its
+  Release button then makes its agent accept the central unit's goals again (the agent's answer says it was
+  held);
 - EMERGENCY LAND ALL pauses the central unit and lands every UAV.
 """
 import bisect
@@ -85,6 +90,38 @@ class TestLivePage(unittest.TestCase):
     def tearDownClass(cls):
         cls.page.close()
 
+    def frame_robots(self):
+        return json.loads(self.page.eval("JSON.stringify(window.gcs.frame.robots)"))
+
+    def log_text(self):
+        return self.page.eval("document.getElementById('log').innerText")
+
+    def test_0_start_trial_starts_the_work(self):
+        """Before Start trial nothing moves; the button (confirmed) starts the work."""
+        self.page.wait_for(lambda s: "waiting for start" in self.page.eval(
+            "document.getElementById('cu').innerText"), 60, "the central unit waiting for the start")
+        self.assertEqual(self.page.eval("document.getElementById('start').className"), "waiting")
+        t0 = self.page.shown()["t"]
+        self.page.wait_for(lambda s: s["t"] > t0 + 5.0, 60, "5 s of sim time while waiting")
+        self.assertEqual([r["task"] for r in self.frame_robots() if r["task"]], [], "a task before the start")
+        with self.truth.lock:
+            self.assertTrue(self.truth.last_robots and all(z < 0.3 for _, _, z in self.truth.last_robots),
+                            "a robot left the ground before the start: %s" % self.truth.last_robots)
+        self.page.eval("window.confirm = () => true; document.getElementById('start').click(); true")
+        self.page.wait_for(lambda s: "start_trial: done" in self.log_text(), 60, "start_trial done in the log")
+        self.page.wait_for(lambda s: self.page.eval("window.gcs.frame.cu.started") is True, 30,
+                           "the central unit's status: started")
+        self.assertNotIn("waiting for start", self.page.eval("document.getElementById('cu').innerText"))
+        self.page.wait_for(lambda s: any(r["task"] for r in self.frame_robots()), 60, "a robot given a task")
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline:
+            with self.truth.lock:
+                if any(z > 1.0 for _, _, z in self.truth.last_robots):
+                    break
+            time.sleep(0.2)
+        else:
+            self.fail("no UAV took off after the start")
+
     def test_1_robots_follow_the_simulator(self):
         compared, worst, start, end = 0, 0.0, None, None
         deadline = time.monotonic() + 40
@@ -149,6 +186,11 @@ class TestLivePage(unittest.TestCase):
             time.sleep(0.5)
         else:
             self.fail("UAV 2 did not land at home %s; last seen at %s" % (home, last))
+        # Release (confirmed): the agent accepts goals again; its answer names the hold it had
+        self.page.eval("window.confirm = () => true; "
+                       "document.querySelector('.robot[data-robot=\"2\"] button[data-cmd=release]').click(); true")
+        self.page.wait_for(lambda s: "release UAV 2: done" in self.log_text(), 60, "release done in the log")
+        self.assertIn("released (recalled home by the operator)", self.log_text())
 
     def test_4_emergency_land_all(self):
         """EMERGENCY LAND ALL (confirmed): the central unit pauses and every UAV lands where it is."""

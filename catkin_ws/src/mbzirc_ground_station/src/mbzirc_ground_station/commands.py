@@ -16,6 +16,7 @@ COMMANDS = {
     "pause": (False, "Pause the central unit: no new tasks are given"),
     "resume": (False, "Resume the central unit"),
     "send_home": (True, "Send the robot home"),
+    "release": (True, "Release the robot: it takes the central unit's tasks again (after Home or a land)"),
     "land_all": (False, "EMERGENCY: every UAV lands where it is, the central unit pauses"),
 }
 
@@ -25,6 +26,7 @@ SERVICES = {
     "pause": "/central_unit/pause",                   # SetBool (true = pause, false = resume)
     "send_home": "/mbzirc2020_%s/operator/go_home",   # Trigger, per robot
     "land": "/mbzirc2020_%s/operator/land",           # Trigger, per robot
+    "release": "/mbzirc2020_%s/operator/release",     # Trigger, per robot
 }
 
 

@@ -91,8 +91,8 @@ class CommandRunner:
         if cmd.name in ("pause", "resume"):
             return self._call(SERVICES["pause"], SetBool, cmd.name == "pause")
         results = []
-        if cmd.name == "send_home":
-            results = [self._call(SERVICES["send_home"] % r, Trigger) for r in self._robots(cmd.robot)]
+        if cmd.name in ("send_home", "release"):     # per robot, or every robot known
+            results = [self._call(SERVICES[cmd.name] % r, Trigger) for r in self._robots(cmd.robot)]
         elif cmd.name == "land_all":
             results = [self._call(SERVICES["pause"], SetBool, True)]
             results += [self._call(SERVICES["land"] % r, Trigger) for r in self._robots("all", uavs_only=True)]

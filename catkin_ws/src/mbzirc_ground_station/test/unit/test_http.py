@@ -126,3 +126,21 @@ def test_event_stream_starts_with_info_and_a_full_frame(station):
     assert events == [b"event: info\n", b"event: frame\n"]
     assert data[0]["mode"] == "live" and "tracks" in data[1]
     c.close()
+
+
+def test_release_calls_each_robots_release_service():
+    """Release (one robot or all): the agents' operator/release service, one call per robot."""
+    from mbzirc_ground_station.commands import Command
+    from mbzirc_ground_station.ros_adapter import CommandRunner
+    state = GroundStationState()
+    live = LiveSource(state, lambda: 5.0)
+    for rid in ("1", "2"):
+        live.apply("/mbzirc2020_%s/data_feed" % rid, feed(rid, 1.0, 2.0, 3.0))
+    runner = CommandRunner(live)
+    called = []
+    runner._call = lambda name, srv_type, *args: (called.append((name, srv_type.__name__)), (True, name))[1]
+    assert runner(Command("release", "2")) == (True, "/mbzirc2020_2/operator/release")
+    assert runner(Command("release", "all"))[0]
+    assert called == [("/mbzirc2020_2/operator/release", "Trigger"), ("/mbzirc2020_1/operator/release", "Trigger"),
+                      ("/mbzirc2020_2/operator/release", "Trigger")]
+    assert parse_command({"command": "release"}, ["1"])[0] is None     # a robot (or "all") is needed
