@@ -17,6 +17,7 @@ never draws from the simulation's own generator.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence
@@ -56,16 +57,28 @@ def _range(section: Mapping, key: str, where: str, default: Sequence[float]) -> 
 @dataclass(frozen=True)
 class GnssConfig:
     """Standard (non-RTK) GNSS position error: per-axis Gauss-Markov bias std (m), its correlation time (s),
-    and white noise std (m) added to every reported pose."""
+    and white noise std (m) added to every reported pose.
+
+    `denied_indoors`: inside a building's footprint below its roof there is no fix; the reported position
+    then dead-reckons from where the last fix put it (velocity-aided, as an autopilot with optical flow
+    does): its error grows by a per-axis velocity bias (Gauss-Markov, std `indoor_vel_bias_std` m/s,
+    correlation time `indoor_vel_bias_tau` s) plus a scale error (std `indoor_scale_std`, drawn per
+    outage) times the true horizontal velocity. Height keeps the error it had (barometer). The defaults of
+    the three drift numbers are the README's ("No GNSS indoors"); a world file may override them."""
     bias_xy_std: float = 0.0
     bias_z_std: float = 0.0
     tau: float = 30.0
     white_xy_std: float = 0.0
     white_z_std: float = 0.0
+    denied_indoors: bool = False
+    indoor_vel_bias_std: float = 0.02
+    indoor_vel_bias_tau: float = 60.0
+    indoor_scale_std: float = 0.02
 
     @property
     def enabled(self) -> bool:
-        return max(self.bias_xy_std, self.bias_z_std, self.white_xy_std, self.white_z_std) > 0.0
+        return self.denied_indoors or max(self.bias_xy_std, self.bias_z_std, self.white_xy_std,
+                                          self.white_z_std) > 0.0
 
 
 class GaussMarkov:
@@ -87,22 +100,72 @@ class GaussMarkov:
 
 
 class GnssError:
-    """The GNSS error of one robot: the slowly wandering bias and the white noise of each fix."""
+    """The position error of one robot's reported pose: outdoors the GNSS bias (slowly wandering) and the
+    white noise of each fix; indoors without GNSS (`denied_indoors`) a smooth dead-reckoned error that
+    starts from the last fix's bias (no jump on entering) and grows. Back outside the fix returns with the
+    bias as it wandered meanwhile (the receiver's error never stopped): the reported pose jumps by the
+    dead-reckoned drift, as an autopilot's estimate does when GNSS is re-acquired."""
 
     def __init__(self, cfg: GnssConfig, rng: np.random.Generator):
         self.cfg = cfg
         self.rng = rng
         self.bias = GaussMarkov(np.array([cfg.bias_xy_std, cfg.bias_xy_std, cfg.bias_z_std]), cfg.tau, rng)
         self.white_std = np.array([cfg.white_xy_std, cfg.white_xy_std, cfg.white_z_std])
+        self.error = self.bias.value.copy()     # smooth part of the reported error (what a controller follows)
+        self.denied = False                    # no fix now (indoors with denied_indoors)
+        self._vel_bias: Optional[GaussMarkov] = None
+        self._scale = np.zeros(2)
 
-    def step(self, dt: float) -> np.ndarray:
-        """Advance the bias by dt; returns its change (the shift of the true set-point is minus that)."""
-        before = self.bias.value.copy()
-        return self.bias.step(dt) - before
+    def step(self, dt: float, indoors: bool = False, vel: Optional[np.ndarray] = None) -> np.ndarray:
+        """Advance by dt (`indoors`: the robot is inside a building now; `vel`: its true velocity); returns
+        the change of the smooth error (the shift of the true set-point is minus that)."""
+        before = self.error.copy()
+        self.bias.step(dt)
+        if indoors and self.cfg.denied_indoors:
+            if not self.denied:      # the fix is lost: this outage's dead-reckoning errors
+                self.denied = True
+                s = self.cfg.indoor_vel_bias_std
+                self._vel_bias = GaussMarkov(np.array([s, s, 0.0]), self.cfg.indoor_vel_bias_tau, self.rng)
+                self._scale = self.cfg.indoor_scale_std * self.rng.standard_normal(2)
+            else:
+                self._vel_bias.step(dt)
+            rate = self._vel_bias.value.copy()
+            if vel is not None:
+                rate[:2] += self._scale * np.asarray(vel, dtype=float)[:2]
+            self.error = self.error + rate * dt
+        else:
+            self.denied = False
+            self.error = self.bias.value.copy()
+        return self.error - before
 
     def fix(self) -> np.ndarray:
-        """Error of one reported position: bias + white noise (x, y, z)."""
-        return self.bias.value + self.white_std * self.rng.standard_normal(3)
+        """Error of one reported position (x, y, z): bias + white noise, or the dead-reckoned error."""
+        if self.denied:
+            return self.error.copy()
+        return self.error + self.white_std * self.rng.standard_normal(3)
+
+
+def building_volumes(bmin: np.ndarray, bmax: np.ndarray, buildings: Sequence[str]) -> np.ndarray:
+    """(K, 5) rows [x0, y0, x1, y1, roof_z] of every building (boxes tagged `building:`): its footprint is
+    the horizontal extent of its outline (outer walls and roofs), its roof the top of its widest flat box
+    (the top of its highest box if it has none), so that a roof structure does not raise the roof."""
+    out = []
+    tags = np.asarray(list(buildings), dtype=object)
+    for name in sorted({b for b in buildings if b}):
+        sel = np.nonzero(tags == name)[0]
+        ext = bmax[sel] - bmin[sel]
+        flat = np.argmin(ext, axis=1) == 2
+        area = ext[:, 0] * ext[:, 1]
+        roof = bmax[sel[np.argmax(np.where(flat, area, -1.0))], 2] if flat.any() else bmax[sel, 2].max()
+        out.append([bmin[sel, 0].min(), bmin[sel, 1].min(), bmax[sel, 0].max(), bmax[sel, 1].max(), roof])
+    return np.array(out, dtype=float).reshape(-1, 5)
+
+
+def inside_building(p: Sequence[float], volumes: np.ndarray) -> bool:
+    """True when p (x, y, z) is within a building's footprint and below its roof (no GNSS there)."""
+    x, y, z = float(p[0]), float(p[1]), float(p[2])
+    v = volumes
+    return bool(np.any((v[:, 0] < x) & (x < v[:, 2]) & (v[:, 1] < y) & (y < v[:, 3]) & (z < v[:, 4])))
 
 
 # ---------------------------------------------------------------------------------------------- laser
@@ -239,10 +302,18 @@ def parse_profile(name: str, raw: Any) -> UncertaintyConfig:
     for k, v in (("gnss", g), ("laser", las), ("physics", ph)):
         if not isinstance(v, dict):
             raise UncertaintyError(f"{w}.{k}: must be a mapping")
-    gnss = GnssConfig(**{k: _num(g, k, f"{w}.gnss", getattr(GnssConfig, k)) for k in
-                         ("bias_xy_std", "bias_z_std", "tau", "white_xy_std", "white_z_std")})
-    if gnss.tau <= 0.0:
-        raise UncertaintyError(f"{w}.gnss.tau: must be > 0, got {gnss.tau}")
+    unknown = set(g) - set(GnssConfig.__dataclass_fields__)
+    if unknown:
+        raise UncertaintyError(f"{w}.gnss: unknown keys {sorted(unknown)}")
+    denied = g.get("denied_indoors", False)
+    if not isinstance(denied, bool):
+        raise UncertaintyError(f"{w}.gnss.denied_indoors: must be true or false, got {denied!r}")
+    gnss = GnssConfig(denied_indoors=denied, **{k: _num(g, k, f"{w}.gnss", getattr(GnssConfig, k)) for k in
+                                                ("bias_xy_std", "bias_z_std", "tau", "white_xy_std", "white_z_std",
+                                                 "indoor_vel_bias_std", "indoor_vel_bias_tau", "indoor_scale_std")})
+    for k in ("tau", "indoor_vel_bias_tau"):
+        if getattr(gnss, k) <= 0.0:
+            raise UncertaintyError(f"{w}.gnss.{k}: must be > 0, got {getattr(gnss, k)}")
     laser = LaserConfig(**{k: _num(las, k, f"{w}.laser", 0.0) for k in
                            ("range_std_frac", "range_std_min", "nan_rate", "inf_rate")})
     if laser.nan_rate + laser.inf_rate > 1.0:
@@ -259,6 +330,13 @@ def parse_profile(name: str, raw: Any) -> UncertaintyConfig:
     if unknown:
         raise UncertaintyError(f"{w}.physics: unknown keys {sorted(unknown)}")
     return UncertaintyConfig(name, gnss, laser, PhysicsConfig(**ranges))
+
+
+def with_gnss_denied_indoors(cfg: UncertaintyConfig, denied: Optional[bool]) -> UncertaintyConfig:
+    """The profile with its `gnss.denied_indoors` switch overridden (None: as the profile says)."""
+    if denied is None or denied == cfg.gnss.denied_indoors:
+        return cfg
+    return dataclasses.replace(cfg, gnss=dataclasses.replace(cfg.gnss, denied_indoors=bool(denied)))
 
 
 def profile(section: Any, name: str) -> UncertaintyConfig:
@@ -283,14 +361,29 @@ class TrialUncertainty:
         self.unknowns = draw_unknowns(cfg.physics, self.rng, n_fires, list(robot_ids), bmin, bmax, box_temp,
                                       buildings)
         self.gnss = {rid: GnssError(cfg.gnss, self.rng) for rid in robot_ids} if cfg.gnss.enabled else {}
+        self.buildings = building_volumes(bmin, bmax, buildings)
 
-    def step_gnss(self, dt: float) -> dict:
-        """Advance every robot's GNSS bias; returns robot id -> change of its bias (x, y, z)."""
-        return {rid: g.step(dt) for rid, g in self.gnss.items()}
+    def step_gnss(self, dt: float, motion: Optional[Mapping[int, tuple]] = None) -> dict:
+        """Advance every robot's position error; motion: robot id -> (true position, true velocity), which
+        decides whether it is indoors (no fix) and how its dead reckoning drifts. Returns robot id -> change
+        of its smooth error (x, y, z)."""
+        out = {}
+        for rid, g in self.gnss.items():
+            pos, vel = (motion or {}).get(rid, (None, None))
+            indoors = pos is not None and self.cfg.gnss.denied_indoors and inside_building(pos, self.buildings)
+            out[rid] = g.step(dt, indoors, vel)
+        return out
 
     def gnss_bias(self, rid: int) -> np.ndarray:
+        """The smooth part of the robot's reported-position error (the GNSS bias outdoors, the dead-reckoned
+        error indoors): a controller closing its loop on the reported pose is off by minus this."""
         g = self.gnss.get(rid)
-        return g.bias.value if g is not None else np.zeros(3)
+        return g.error if g is not None else np.zeros(3)
+
+    def gnss_valid(self, rid: int) -> bool:
+        """False while the robot has no GNSS fix (indoors with `denied_indoors`)."""
+        g = self.gnss.get(rid)
+        return g is None or not g.denied
 
     def gnss_fix(self, rid: int) -> np.ndarray:
         g = self.gnss.get(rid)
@@ -302,6 +395,7 @@ class TrialUncertainty:
         return corrupt_scan(ranges, self.cfg.laser, self.rng, range_min, range_max)
 
 
-__all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "LaserConfig",
+__all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "building_volumes",
+           "inside_building", "with_gnss_denied_indoors", "LaserConfig",
            "corrupt_scan", "PhysicsConfig", "Unknowns", "draw_unknowns", "sun_heated_normals",
            "UncertaintyConfig", "parse_profile", "profile", "TrialUncertainty"]
