@@ -3,6 +3,7 @@
 #                  UNCERTAINTY=realistic (GNSS error, unknown water and heat, laser dropouts; default ideal)
 #                  GCS=0 (no web ground station; it is on http://127.0.0.1:8088/ by default)  GCS_PORT=
 #   make replay BAG=results/.../mission.bag   replay a recorded trial on the ground station page  GCS_PORT=
+#                  (without BAG: the page lists the recordings under results/ to pick one)
 #   make test      run every test (pytest unit tests + rostest integration tests + the short fault suite)
 #                  PKGS="smach ual_sim"   SKIP_FAULTS=1 (no fault suite)
 #   make bench     run the benchmarks, write bench/results/latest.json
@@ -31,8 +32,7 @@ mission: setup
 	  GCS=$(GCS) GCS_PORT=$(GCS_PORT) UNCERTAINTY=$(UNCERTAINTY)
 
 replay: setup
-	@[ -n "$(BAG)" ] || { echo "usage: make replay BAG=results/<mission>/mission.bag [GCS_PORT=8088]" >&2; exit 2; }
-	@source env.sh && rosrun mbzirc_ground_station replay "$(BAG)" --port $(GCS_PORT)
+	@source env.sh && rosrun mbzirc_ground_station replay $(if $(BAG),"$(BAG)") --port $(GCS_PORT)
 
 test: setup
 	@bash tools/run_tests.sh $(PKGS)

@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
 """rostest: `replay` of the committed short bag shows, at each time t, the robots where the bag's data_feeds
-put them at t (what the live page showed), scrubbing back and forth and while playing."""
+put them at t (what the live page showed), scrubbing back and forth and while playing; `replay` without a
+bag offers the recordings of its results directory: the one picked on the page is replayed the same way,
+and a name outside the directory or of a file that is no bag is refused with the reason on the page."""
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -35,17 +38,24 @@ def feeds_at(t):
 
 
 class TestReplayPage(unittest.TestCase):
-    @classmethod
-    def start_replay(cls, port):
-        """Start the replay node on port (0: any); returns the port it bound."""
+    @staticmethod
+    def launch_replay(port, *args):
+        """Start the replay node on port (0: any) with args; returns (process, the port it bound)."""
         port_file = os.path.join(tempfile.mkdtemp(prefix="gcs_replay_"), "port")
-        cls.proc = subprocess.Popen([sys.executable, os.path.join(PKG, "scripts", "replay"), BAG, "--port",
-                                     str(port), "--port-file", port_file])
+        proc = subprocess.Popen([sys.executable, os.path.join(PKG, "scripts", "replay"), *args, "--port",
+                                 str(port), "--port-file", port_file])
         deadline = time.monotonic() + 30
         while not os.path.exists(port_file) or not open(port_file).read():
-            assert time.monotonic() < deadline, "replay did not start"
+            if time.monotonic() > deadline or proc.poll() is not None:
+                proc.kill()
+                raise AssertionError("replay did not start")
             time.sleep(0.1)
-        return int(open(port_file).read())
+        return proc, int(open(port_file).read())
+
+    @classmethod
+    def start_replay(cls, port):
+        cls.proc, port = cls.launch_replay(port, BAG)
+        return port
 
     @classmethod
     def setUpClass(cls):
@@ -67,8 +77,8 @@ class TestReplayPage(unittest.TestCase):
         cls.proc.terminate()
         cls.proc.wait(10)
 
-    def control(self, body):
-        req = urllib.request.Request(self.base + "/api/replay", json.dumps(body).encode(),
+    def control(self, body, base=None):
+        req = urllib.request.Request((base or self.base) + "/api/replay", json.dumps(body).encode(),
                                      {"Content-Type": "application/json"})
         with urllib.request.urlopen(req, timeout=30) as r:   # generous: the suite runs on a busy machine
             self.assertEqual(json.load(r), {"ok": True})
@@ -122,6 +132,40 @@ class TestReplayPage(unittest.TestCase):
         self.control({"action": "seek", "t": self.start + 7.0})
         self.check_positions(self.page.wait_for(
             lambda s: s["replay"] and abs(s["replay"]["t"] - (self.start + 7.0)) < 1e-6, 30, "the seek"))
+
+    def test_zz_picked_recording_is_replayed(self):
+        """`replay` without a bag: the page lists the results directory's bags; the one picked plays."""
+        results = tempfile.mkdtemp(prefix="gcs_results_")
+        os.makedirs(os.path.join(results, "trial_a"))
+        shutil.copy(BAG, os.path.join(results, "trial_a", "mission.bag"))
+        with open(os.path.join(results, "notes.txt"), "w") as f:
+            f.write("not a bag")
+        proc, port = self.launch_replay(0, "--results-dir", results)
+        base = "http://127.0.0.1:%d" % port
+        try:
+            self.page.eval("location.assign(%s); true" % json.dumps(base + "/"))
+            self.page.wait_for(lambda s: self.page.eval(
+                "Array.from(document.querySelectorAll('#recordings option')).map((o) => o.value).join(',')")
+                == ",trial_a/mission.bag", 30, "the picker listing the one bag")
+            self.assertIn("pick one", self.page.eval("document.getElementById('mode').textContent"))
+            self.page.eval("const s = document.getElementById('recordings'); s.value = 'trial_a/mission.bag'; "
+                           "s.dispatchEvent(new Event('change')); true")
+            self.page.wait_for(lambda s: s["replay"] is not None, 30, "the picked recording's timeline")
+            self.assertEqual(self.page.eval("location.search"), "?bag=trial_a%2Fmission.bag")
+            self.assertIn("REPLAY of trial_a/mission.bag", self.page.eval("document.getElementById('mode').textContent"))
+            for dt in (6.0, 21.5):
+                target = round(self.start + dt, 2)
+                self.control({"bag": "trial_a/mission.bag", "action": "seek", "t": target}, base)
+                self.check_positions(self.page.wait_for(
+                    lambda s: s["replay"] and abs(s["replay"]["t"] - target) < 1e-6, 30, "t = %.2f" % target))
+            for name, why in (("../trial_a/mission.bag", "'..' is refused"), ("notes.txt", "is not a bag"),
+                              ("/etc/passwd", "absolute paths are refused")):
+                self.page.eval("location.assign(%s); true" % json.dumps(base + "/?bag=" + name))
+                self.page.wait_for(lambda s: why in self.page.eval(
+                    "document.getElementById('pickerror').textContent"), 30, "the refusal of %s" % name)
+        finally:
+            proc.terminate()
+            proc.wait(10)
 
 
 if __name__ == "__main__":

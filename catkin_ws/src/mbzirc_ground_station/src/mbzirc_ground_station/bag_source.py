@@ -5,14 +5,16 @@ long trial is never held in memory. Stamps are the bag's receive times: the reco
 """
 from __future__ import annotations
 
-from typing import Any, Iterator
+from typing import Any, Iterator, Optional
 
 import rosbag
 import rospy
 
+from .replay import Replay
 from .routing import REPLAY_TOPIC_REGEX
+from .state import GroundStationState
 
-__all__ = ["BagSource"]
+__all__ = ["BagSource", "open_bag_replay"]
 
 
 class BagSource:
@@ -34,3 +36,11 @@ class BagSource:
 
     def close(self) -> None:
         self.bag.close()
+
+
+def open_bag_replay(path: str, arena: Optional[dict], name: str) -> tuple[Replay, dict]:
+    """A paused Replay of the bag at `path` and the page's info for it (`name`: how the page names it).
+    Raises what rosbag raises for a file it cannot read."""
+    replay = Replay(BagSource(path), lambda: GroundStationState(arena))
+    info = {"mode": "replay", "arena": arena, "bag": name, "smach_viewer_port": 0, "commands": {}}
+    return replay, info

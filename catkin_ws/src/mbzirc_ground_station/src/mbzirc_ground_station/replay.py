@@ -143,6 +143,12 @@ class Replay:
             return False, "unknown action %r" % (action,)
         return True, ""
 
+    def close(self) -> None:
+        """Frees the source (a bag file); the replay is not used after this."""
+        close = getattr(self.source, "close", None)
+        if close is not None:
+            close()
+
     def frame(self, tracks: bool = False) -> dict:
         with self.lock:
             out = self.state.frame(self.t, tracks=tracks)
