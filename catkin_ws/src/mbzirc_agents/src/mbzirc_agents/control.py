@@ -1,4 +1,5 @@
-"""Pure controllers of the tasks: centring a hole at the nozzle, centring a ground fire under the UAV.
+"""Pure controllers of the tasks: centring a hole at the nozzle, centring a ground fire under the UAV,
+centring on a window or door and going through it.
 
 Why pure: the loops run at a fixed rate in the tasks; their maths (frames, gains, saturation, when
 "centred" holds) is tested here without a simulator.
@@ -169,6 +170,41 @@ class GroundFireCentering:
         """True when over the fire within tolerance and at release height (+-0.3 m)."""
         exy = math.hypot(fire_xy[0] - uav[0], fire_xy[1] - uav[1])
         return exy <= self.tolerance and abs(uav[2] - (ground_z + self.release_height)) <= 0.3
+
+
+@dataclass
+class OpeningPassage:
+    """Body-frame velocity (vx, vy) that centres the robot on an opening in the wall ahead (a window, a
+    door: openings.SeenOpening), then takes it through with the lateral correction still applied.
+
+    Args:
+        standoff: m from the wall the robot keeps at least while centring (it backs off when closer: the
+            GNSS error may have put it nearer than planned); gain: 1/s; lateral_vmax: m/s sideways (and
+            backing off); speed: m/s forward through; tolerance: m off the opening's middle that counts as
+            centred. Through, forward motion stops while the robot is more than twice that off the middle.
+    """
+    standoff: float = 1.0
+    gain: float = 1.0
+    lateral_vmax: float = 0.4
+    speed: float = 0.4
+    tolerance: float = 0.12
+
+    def centred(self, lateral: float, distance: float) -> bool:
+        """True when the opening's middle is straight ahead and the wall no nearer than the standoff."""
+        return abs(lateral) <= self.tolerance and distance >= self.standoff - self.tolerance
+
+    def centring(self, lateral: float, distance: float) -> np.ndarray:
+        """Sideways onto the opening's middle, backing off when nearer than the standoff (never forward)."""
+        vx = self.gain * min(0.0, distance - self.standoff)
+        return saturate(np.array([vx, self.gain * lateral]), self.lateral_vmax)
+
+    def through(self, lateral: Optional[float]) -> np.ndarray:
+        """Forward at `speed`, sideways onto the middle when it is seen (None: straight on)."""
+        if lateral is None or not math.isfinite(lateral):
+            return np.array([self.speed, 0.0])
+        vy = float(np.clip(self.gain * lateral, -self.lateral_vmax, self.lateral_vmax))
+        vx = self.speed if abs(lateral) <= 2.0 * self.tolerance else 0.0
+        return np.array([vx, vy])
 
 
 def yaw_rate_to(current_yaw: float, target_yaw: float, gain: float = 1.0, max_rate: float = 0.8) -> float:

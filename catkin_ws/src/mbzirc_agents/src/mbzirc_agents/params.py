@@ -76,7 +76,20 @@ class AgentParams:
     ground_search_spacing: float = _param(3.0, 'm between the lawn-mower legs')
     ground_check_time: float = _param(1.5, 's of dwell at each ground-search waypoint (frame filter > 1 s)')
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
-    entry_depth: float = _param(2.5, 'm flown straight in through a window')
+    entry_depth: float = _param(2.5, 'm flown in through a window, from the entry pose')
+    laser_openings: bool = _param(True, 'windows and doors are passed guided by the laser (`scan`): centred '
+                                  'on the opening it sees, then through; false: a straight leg in the arena frame')
+    opening_width: float = _param(0.0, 'm, width of the window / door the laser looks for; 0: the arena '
+                                  "model's width of the nearest one")
+    opening_width_tolerance: float = _param(0.4, 'm: an opening seen this much narrower or wider is not it')
+    opening_standoff: float = _param(1.0, 'm from the wall kept at least while centring on an opening')
+    opening_tolerance: float = _param(0.12, "m off the opening's middle that counts as centred")
+    opening_speed: float = _param(0.4, 'm/s through an opening')
+    opening_timeout: float = _param(20.0, 's to find and centre on an opening before giving up (holding)')
+    opening_jump_max: float = _param(0.5, "m the opening's middle may move between two scans (beyond the "
+                                     "robot's own motion) before the passage is aborted")
+    opening_keep_off: float = _param(0.6, 'm: in an opening, no velocity towards a laser return nearer than '
+                                     'this (from the laser, the robot centre)')
     indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')

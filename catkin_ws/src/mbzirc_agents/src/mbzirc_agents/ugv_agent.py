@@ -19,7 +19,8 @@ UGV_TASKS = [
 UGV_SUB_TASKS = {'go_to': (ugv.UgvGoTo, {}), 'move': (ugv.UgvGoTo, {'straight': True})}
 
 # The UGV's defaults where they differ from a UAV's (params.AgentParams).
-UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0}
+UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0,
+                'opening_keep_off': 0.9}   # its 0.6 m radius in the 2.5 m door
 
 
 class UgvAgent(RobotAgent):

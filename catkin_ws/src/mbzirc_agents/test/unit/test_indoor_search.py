@@ -7,6 +7,7 @@ from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
 from fake_ual import start_ugv
+from laser_world import LaserScene
 from mbzirc_agents import constants as C
 
 
@@ -16,7 +17,10 @@ def ugv_inside():
     be = FakeBackend()
     last = C.UGV_INDOOR_PATH[-1]
     agent, ual = start_ugv(be, (last[0], last[1], 0.0), {'check_fire_time': 1.0})
+    ual.follow_velocity = True                   # the way out through the door is laser guided
+    scene = LaserScene(be, ual, laser_z=0.9)
     yield agent, ual, be
+    scene.stop = True
     be.shutdown = True
     ual.stop = True
     agent.shutdown()

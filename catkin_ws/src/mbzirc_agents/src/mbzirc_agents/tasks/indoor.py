@@ -14,6 +14,7 @@ from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from .cold_check import ColdConfirmation, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
+from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
@@ -47,17 +48,20 @@ def gen_indoor_fire(goal, agent) -> dict:
 
 
 class EnterBuilding(AgentTask):
-    """Fly to the entry pose outside a window, then ~entry_depth m straight ahead through it."""
+    """Fly to the entry pose outside a window, then ~entry_depth m ahead through it: centred on the window
+    the laser sees (tasks/passage.py; the entry pose carries the GNSS error)."""
     INPUT_KEYS = ['floor', 'entry']
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.passage = LaserPassage(self)
 
     def run(self, ud) -> str:
         (pos, yaw) = ud.entry
         self.feedback('APPROACHING', f'to the window of floor {ud.floor}')
         self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
-        d = self.agent.p.entry_depth
-        inside = (pos[0] + d * math.cos(yaw), pos[1] + d * math.sin(yaw), pos[2])
-        self.feedback('ENTERING', 'flying through the window')
-        self.call_task_or_raise('move', {'waypoint': (inside, yaw)})
+        self.feedback('ENTERING', 'through the window')
+        self.passage.ahead(yaw, self.agent.p.entry_depth)
         self.result['message'] = f'inside floor {ud.floor}'
         return C.SUCCESS
 
@@ -67,8 +71,14 @@ class SearchIndoor(AgentTask):
 
     A waypoint with an orientation is a viewpoint: the robot looks that way for `~check_fire_time`. One
     without (an all-zero quaternion) makes it turn on the spot and look along the four wall directions.
+    A leg that crosses the building's outline (in or out through a window or the door) is passed guided by
+    the laser (tasks/passage.py).
     """
     INPUT_KEYS = ['floor', 'path']
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.passage = LaserPassage(self)
 
     def run(self, ud) -> str:
         a = self.agent
@@ -76,7 +86,13 @@ class SearchIndoor(AgentTask):
         found: list = []
         for i, (wp, yaw) in enumerate(path):
             self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
-            self.call_task_or_raise('move', {'waypoint': (wp, yaw)}, f'waypoint {i + 1}')
+            try:
+                if crosses_outline(a.position(), wp):
+                    self.passage.to(wp)
+                else:
+                    self.call_task_or_raise('move', {'waypoint': (wp, yaw)})
+            except TaskError as e:
+                raise TaskError(f'waypoint {i + 1}: {e}')
             found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p.stop_at_first_fire:
                 break

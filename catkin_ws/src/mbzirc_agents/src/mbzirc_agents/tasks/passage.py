@@ -1,0 +1,248 @@
+"""LaserPassage: through a window (UAV) or door (UGV) guided by the robot's own 2D laser.
+
+Why: the robots fly and drive on GNSS, about a metre off; a straight leg computed in the arena frame hits
+the window or door frame (seen in realistic missions). As the thesis did, the opening is found with the
+laser before going in (`openings.find_opening`), the robot centres on it sideways (velocity commands,
+facing the wall), then goes through with the lateral correction applied while the opening's edges are
+seen (ahead, then beside it: `openings.side_clearances`).
+
+Safety: the laser blind (every beam NaN) or silent -> the robot holds; an opening not found and centred in
+`~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
+robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
+nearer than `~opening_keep_off` (control.keep_off_return).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Optional, Tuple
+
+import numpy as np
+from sensor_msgs.msg import LaserScan
+from mbzirc_arena.boxes import swept_box
+from mbzirc_arena.buildings import in_footprint, standing_at
+from mbzirc_arena.c3 import ARENA
+
+from .. import constants as C
+from ..agent_task import AgentTask, TaskError
+from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
+from ..openings import SeenOpening, find_opening, side_clearances
+from .uav_motion import hold_box
+
+CENTRED_SCANS = 3          # consecutive centred control steps before going through
+SEARCH_RADIUS = 2.5        # m: an opening further aside than this from the arena model's is not the one
+
+
+def nearest_opening(kind: str, point) -> Any:
+    """The arena model's window or door (mbzirc_arena Opening) nearest point; None when it has none."""
+    found = ARENA.windows() if kind == 'window' else ARENA.doors()
+    if not found:
+        return None
+    return min(found, key=lambda o: math.dist(o.centre, point[:3]))
+
+
+def crosses_outline(a, b) -> bool:
+    """True when the straight leg a -> b goes from outside a building's outline to inside or back."""
+    return in_footprint(a, standing_at(a, C.BUILDINGS)) != in_footprint(b, standing_at(b, C.BUILDINGS))
+
+
+class LaserPassage:
+    """Passage through an opening for a task: keeps the latest scan while the task runs.
+
+    Args:
+        task: the AgentTask it moves for (its preemption, feedback and regions).
+    """
+
+    def __init__(self, task: AgentTask) -> None:
+        self.task = task
+        self.agent = task.agent
+        self._scan: Optional[Tuple[Any, float]] = None     # (LaserScan, receive time)
+        self._blind_since: Optional[float] = None
+        task.iface.add_subscriber(task.name, 'scan', LaserScan, self._on_scan)
+
+    # ---- the laser --------------------------------------------------------------------------------
+    def _on_scan(self, msg: LaserScan) -> None:
+        """Keep the latest usable scan; a malformed one is reported and ignored, an all-NaN one is blind."""
+        be = self.agent.backend
+        if (not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment)
+                or msg.angle_increment <= 0):
+            be.logerr_throttle(5.0, 'scan: empty or bad angles, ignored')
+            return
+        now = be.now()
+        if np.isnan(np.asarray(msg.ranges, dtype=float)).all():
+            be.logerr_throttle(5.0, 'scan: every beam NaN (laser blind): holding')
+            self._blind_since = now if self._blind_since is None else self._blind_since
+            return
+        self._blind_since = None
+        self._scan = (msg, now)
+
+    def _fresh_scan(self) -> Optional[Any]:
+        """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
+        if self._blind_since is not None or self._scan is None:
+            return None
+        msg, t = self._scan
+        return msg if self.agent.backend.now() - t <= C.SCAN_MAX_AGE else None
+
+    def _see(self, msg: Any, width: float, expected: float) -> Optional[SeenOpening]:
+        p = self.agent.p
+        return find_opening(msg.ranges, msg.angle_min, msg.angle_increment, width, expected_lateral=expected,
+                            tolerance=p.opening_width_tolerance, range_min=msg.range_min,
+                            range_max=msg.range_max if msg.range_max > 0 else math.inf)
+
+    # ---- the passage ------------------------------------------------------------------------------
+    def kind(self) -> str:
+        """What this robot passes: the UAVs windows, the UGV doors."""
+        return 'door' if self.agent.ROBOT_TYPE == 'ugv' else 'window'
+
+    def ahead(self, heading: float, length: float) -> None:
+        """Through the opening ahead along heading, length m from here (enter_building)."""
+        here = self.agent.position()
+        target = tuple(here[:3] + length * np.array([math.cos(heading), math.sin(heading), 0.0]))
+        self._cross(target, heading, length)
+
+    def to(self, target) -> None:
+        """Through the opening between here and target (a leg that crosses a building's outline), along
+        the opening's normal (the arena model's: straight through the wall), as far as target's depth."""
+        here = self.agent.position()
+        model = nearest_opening(self.kind(), 0.5 * (here[:3] + np.asarray(target[:3], dtype=float)))
+        if model is None:
+            raise TaskError(f'the arena model has no {self.kind()}')
+        n = np.array([model.normal[0], model.normal[1], 0.0])
+        inward = in_footprint(target, standing_at(target, C.BUILDINGS))
+        u = -n if inward else n
+        length = max(0.5, float(np.dot(np.asarray(target[:3]) - here[:3], u)))
+        self._cross(target, math.atan2(u[1], u[0]), length)
+
+    def _cross(self, target, heading: float, length: float) -> None:
+        """Laser-guided (go_through) when ~laser_openings, else the task's straight `move` to target."""
+        if self.agent.p.laser_openings:
+            self.go_through(self.kind(), heading, length)
+        else:
+            self.task.call_task_or_raise('move', {'waypoint': (tuple(target[:3]), heading)})
+
+    def go_through(self, kind: str, heading: float, length: float) -> None:
+        """From here, through the `kind` ('window' | 'door') ahead along `heading` (rad): centre on it, then
+        `length` m along the heading from here (GNSS progress). TaskError (holding) when it cannot."""
+        a, task = self.agent, self.task
+        start = a.position()
+        model = nearest_opening(kind, start)
+        if model is None:
+            raise TaskError(f'the arena model has no {kind}')
+        width = a.p.opening_width or model.width
+        prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
+        ctl = OpeningPassage(standoff=a.p.opening_standoff, speed=a.p.opening_speed,
+                             tolerance=a.p.opening_tolerance)
+        u = np.array([math.cos(heading), math.sin(heading), 0.0])
+        end = start[:3] + length * u
+        a.reserve(task, 'go_to', swept_box(start[:3], end, a.p.region_margin))
+        if abs(math.remainder(start[3] - heading, 2 * math.pi)) > a.p.yaw_tolerance:
+            a.move_to(task, start[:3], heading, f'turning to face the {kind}')
+        try:
+            self._last: Optional[Tuple[SeenOpening, float]] = None
+            expected = self._centre(kind, heading, width, prior, ctl)
+            self._through(kind, heading, width, expected, ctl, start, u, length)
+        finally:
+            a.hold()
+        a.reserve(task, 'hold', hold_box(a, a.position()))
+        a.free('go_to')
+
+    def _check_jump(self, seen: SeenOpening, kind: str, allowance_speed: float) -> None:
+        """TaskError when the opening's middle moved implausibly since the last scan it was seen in."""
+        now = self.agent.backend.now()
+        if self._last is not None:
+            last, t = self._last
+            moved = math.hypot(seen.lateral - last.lateral, seen.distance - last.distance)
+            allowed = self.agent.p.opening_jump_max + allowance_speed * min(1.0, now - t)
+            if moved > allowed:
+                raise TaskError(f'the {kind} seen by the laser jumped {moved:.2f} m between two scans '
+                                f'(> {allowed:.2f} m): not going through')
+        self._last = (seen, now)
+
+    def _command(self, v_body: np.ndarray, heading: float, msg: Optional[Any]) -> None:
+        """Send a body-frame (vx, vy) as a world velocity, facing `heading`, kept off laser returns."""
+        a = self.agent
+        p = a.position()
+        v = body_to_world((float(v_body[0]), float(v_body[1]), 0.0), p[3])
+        if msg is not None:
+            d, ang = nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
+            v = keep_off_return(v, p[3], d, ang, a.p.opening_keep_off)
+        a.send_velocity(v, yaw_rate_to(p[3], heading))
+
+    def _hold(self, heading: float) -> None:
+        a = self.agent
+        a.send_velocity((0.0, 0.0, 0.0), yaw_rate_to(a.position()[3], heading))
+
+    def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage) -> float:
+        """Find the opening and centre on it; its lateral (m, body y) when centred."""
+        a, task = self.agent, self.task
+        dt = 1.0 / C.CONTROL_RATE_HZ
+        t0 = a.backend.now()
+        centred = 0
+        while True:
+            task.check_preempt()
+            if a.backend.now() - t0 > a.p.opening_timeout:
+                why = ('the laser is blind' if self._blind_since is not None else
+                       'no scan' if self._fresh_scan() is None else
+                       f'no {kind} {width:.1f} m wide centred' if self._last is not None else
+                       f'no {kind} {width:.1f} m wide seen')
+                raise TaskError(f'{kind} not found ahead by the laser in {a.p.opening_timeout:.0f} s ({why}): '
+                                'holding')
+            msg = self._fresh_scan()
+            seen = None if msg is None else self._see(msg, width, expected)
+            if seen is not None and abs(seen.lateral - expected) > SEARCH_RADIUS and self._last is None:
+                seen = None                          # another opening than the arena model's
+            if seen is None:
+                self._hold(heading)
+                task.feedback('FINDING', f'looking for the {kind} with the laser')
+                a.backend.sleep(dt)
+                continue
+            self._check_jump(seen, kind, ctl.lateral_vmax)
+            expected = seen.lateral
+            yaw_ok = abs(math.remainder(a.position()[3] - heading, 2 * math.pi)) <= a.p.yaw_tolerance
+            centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok else 0
+            if centred >= CENTRED_SCANS:
+                a.backend.loginfo(f'[{task.name}] centred on the {kind} ({seen.width:.2f} m wide, '
+                                  f'{seen.distance:.2f} m ahead, {seen.lateral:+.2f} m aside): going through')
+                return seen.lateral
+            task.feedback('CENTERING', f'{kind} {seen.width:.2f} m wide, {seen.distance:.2f} m ahead, '
+                                       f'{seen.lateral:+.2f} m aside')
+            self._command(ctl.centring(seen.lateral, seen.distance), heading, msg)
+            a.backend.sleep(dt)
+
+    def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
+                 start: np.ndarray, u: np.ndarray, length: float) -> None:
+        """Forward until `length` m along u from start, centred on the opening while its edges are seen."""
+        a, task = self.agent, self.task
+        dt = 1.0 / C.CONTROL_RATE_HZ
+        timeout = length / max(0.1, ctl.speed) + a.p.opening_timeout
+        t0 = a.backend.now()
+        while True:
+            task.check_preempt()
+            p = a.position()
+            done = float(np.dot(p[:3] - start[:3], u))
+            if done >= length:
+                return
+            if a.backend.now() - t0 > timeout:
+                raise TaskError(f'not through the {kind} after {timeout:.0f} s ({length - done:.1f} m left): '
+                                'holding')
+            msg = self._fresh_scan()
+            if msg is None:
+                self._hold(heading)                  # blind or silent laser: no motion we cannot see
+                task.feedback('HOLDING', f'in the {kind}: no usable scan')
+                a.backend.sleep(dt)
+                continue
+            seen = self._see(msg, width, expected)
+            if seen is not None and self._last is not None \
+                    and seen.distance > self._last[0].distance + a.p.opening_jump_max:
+                seen = None          # an opening in a wall beyond (across the room), not the one passed
+            lateral = None
+            if seen is not None:
+                self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
+                lateral = expected = seen.lateral
+            else:
+                left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
+                if abs(left + right - width) <= a.p.opening_width_tolerance:
+                    lateral = 0.5 * (left - right)        # its edges beside the robot: keep to the middle
+            task.feedback('PASSING', f'through the {kind}: {length - done:.1f} m to go'
+                          + ('' if lateral is None else f', {lateral:+.2f} m aside'))
+            self._command(ctl.through(lateral), heading, msg)
+            a.backend.sleep(dt)

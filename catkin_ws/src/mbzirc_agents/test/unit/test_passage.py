@@ -1,0 +1,159 @@
+"""Window and door passage guided by the laser (tasks/passage.py) against the fake UAL and a ray-cast laser
+(laser_world.LaserScene) of a world that is a metre away from the arena model: what a robot with a metre
+of GNSS bias sees. The robot's TRUE track must stay inside the opening, minus its radius, where it crosses
+the wall (ual_sim: UAV sphere 0.35 m, UGV 0.6 m); a straight leg in the arena frame does not.
+"""
+import math
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs.msg import EnterBuildingGoal, SearchIndoorGoal, TakeOffGoal
+from mbzirc_comm_objs.srv import CheckFireResponse
+
+from fake_backend import FakeBackend
+from fake_ual import start_uav, start_ugv
+from laser_world import LaserScene, wall_boxes
+from mbzirc_agents import constants as C
+
+# first-floor window of facade A (outer face y = 19.5, wall 19.3-19.5): x 14.5-16.5 in the arena model
+WINDOW_X, WALL_Y = 15.5, (19.3, 19.5)
+UAV_R, UGV_R = 0.35, 0.6
+DOOR_X, DOOR_WALL_Y = 14.25, (6.7, 6.9)     # facade B door, x 13.0-15.5 in the arena model
+
+
+def pose(x, y, z, yaw):
+    p = PoseStamped()
+    p.header.frame_id = 'arena'
+    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
+    p.pose.orientation.z, p.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    return p
+
+
+class Track:
+    """The robot's true x each time its true y is within the wall band (its radius around the wall),
+    within 4 m of the opening (not on the way around the building's corner)."""
+
+    def __init__(self, be, ual, band, radius, x):
+        self.xs, self.stop = [], False
+        lo, hi = band[0] - radius, band[1] + radius
+
+        def loop():
+            while not self.stop:
+                if lo <= ual.pos[1] <= hi and abs(ual.pos[0] - x) < 4.0:
+                    self.xs.append(float(ual.pos[0]))
+                be.clock.sleep(0.02)
+        be.clock.start_thread(loop, name='track')
+
+    def within(self, x0, x1):
+        return bool(self.xs) and min(self.xs) >= x0 and max(self.xs) <= x1
+
+
+@pytest.fixture
+def uav():
+    be = FakeBackend()
+    agent, ual = start_uav(be, speedup=1.0)
+    ual.follow_velocity = True
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=3.0))
+    assert s.wait(20) == 'succeeded'
+    scene = LaserScene(be, ual, shift=(-1.0, 0.0))      # the window truly at x 13.5-15.5
+    yield agent, ual, be, scene
+    scene.stop = True
+    be.shutdown = True
+    ual.stop = True
+    agent.shutdown()
+
+
+def enter(be, timeout=120):
+    s = be.servers['enter_building_action']
+    s.send(EnterBuildingGoal(floor=1, entry=pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
+    return s, s.wait(timeout)
+
+
+def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav):
+    agent, ual, be, scene = uav
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    true_x = WINDOW_X - 1.0
+    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+    assert ual.pos[1] < WALL_Y[0] - UAV_R, f'not inside: {ual.pos}'
+    assert any('centred on the window' in m for m in be.infos), be.infos
+
+
+def test_the_straight_leg_of_old_hits_the_frame(uav):
+    """The same entry without the laser (~laser_openings false): the UAV crosses the wall outside the
+    window, a crash in the simulator (the check above can fail)."""
+    agent, ual, be, scene = uav
+    agent.p.laser_openings = False
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    true_x = WINDOW_X - 1.0
+    assert not track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R)
+
+
+def test_no_window_seen_holds_and_fails(uav):
+    agent, ual, be, scene = uav
+    scene.boxes = wall_boxes(7.6, openings=[])
+    s, status = enter(be)
+    assert status == 'aborted' and 'window not found' in s.result.message, s.result.message
+    assert 'no window 2.0 m wide seen' in s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R                     # still outside, in front of the wall
+
+
+def test_a_blind_laser_holds_and_fails(uav):
+    agent, ual, be, scene = uav
+    scene.blind = True
+    s, status = enter(be)
+    assert status == 'aborted' and 'laser is blind' in s.result.message, s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R
+
+
+def test_a_window_that_jumps_aborts_the_passage(uav):
+    """While centring, the opening seen moves 2 m aside (another window, a bad scan): not chased."""
+    agent, ual, be, scene = uav
+
+    def jump_when_centring():
+        while agent.active_sub_state != 'CENTERING' and not scene.stop:
+            be.clock.sleep(0.05)
+        scene.shift = (1.0, 0.0)
+    be.clock.start_thread(jump_when_centring)
+    s, status = enter(be)
+    assert status == 'aborted' and 'jumped' in s.result.message, s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R
+
+
+@pytest.fixture
+def ugv():
+    """The UGV in front of the facade B door; the world 0.8 m east of the arena model (door x 13.8-16.3)."""
+    be = FakeBackend()
+    out = C.UGV_DOOR_OUTSIDE
+    agent, ual = start_ugv(be, (out[0], out[1], 0.0), {'check_fire_time': 1.0}, speedup=1.0)
+    ual.follow_velocity = True
+    ual.yaw = math.pi / 2
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    scene = LaserScene(be, ual, shift=(0.8, 0.0), laser_z=0.9)
+    yield agent, ual, be, scene
+    scene.stop = True
+    be.shutdown = True
+    ual.stop = True
+    agent.shutdown()
+
+
+def test_the_ugv_drives_in_and_out_through_a_door_off_its_gnss(ugv):
+    agent, ual, be, scene = ugv
+    true_x = DOOR_X + 0.8
+    safe = (true_x - 1.25 + UGV_R, true_x + 1.25 - UGV_R)
+    s = be.servers['search_indoor_action']
+    track = Track(be, ual, DOOR_WALL_Y, UGV_R, DOOR_X)
+    s.send(SearchIndoorGoal(floor=0))
+    assert s.wait(400) == 'succeeded', s.result.message
+    assert track.within(*safe), (min(track.xs), max(track.xs), safe)
+    assert ual.pos[1] > DOOR_WALL_Y[1] + 1.0, 'the search ended outside'
+    track.xs.clear()
+    s.send(SearchIndoorGoal(floor=0))                        # already inside: back the way it came, out
+    assert s.wait(400) == 'succeeded', s.result.message
+    assert track.within(*safe), (min(track.xs), max(track.xs), safe)
+    assert ual.pos[1] < DOOR_WALL_Y[0] - UGV_R, f'not out: {ual.pos}'
