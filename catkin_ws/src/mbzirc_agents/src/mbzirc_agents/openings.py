@@ -40,26 +40,33 @@ class SeenOpening:
     right: float
 
 
-def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int) -> Optional[Tuple[float, float]]:
-    """(d, k) of the nearest wall x = d + k y with at least min_beams returns within +-band, or None.
+def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_slope: float = 0.5,
+               min_span: float = 1.0) -> Optional[Tuple[float, float]]:
+    """(d, k) of the nearest wall x = d + k y facing the robot, or None: at least min_beams returns within
+    +-band of the line, spread over min_span m sideways, at most max_slope off square (a side wall beside
+    the robot, whose returns also crowd at a short x, is none).
 
     The nearest, not the largest: through a window the far side of the room may hold more beams."""
     order = np.sort(x)
     if order.size < min_beams:
         return None
     counts = np.searchsorted(order, order + band, side='right') - np.searchsorted(order, order - band)
-    ok = np.flatnonzero(counts >= min_beams)
-    if ok.size == 0:
-        return None
-    d0 = float(order[ok[0]])
-    d, k = d0, 0.0
-    for tol in (band, 0.5 * band):
-        inl = np.abs(x - (d + k * y)) <= tol
-        if inl.sum() < min_beams:
-            break
-        A = np.column_stack([np.ones(int(inl.sum())), y[inl]])
-        (d, k), *_ = np.linalg.lstsq(A, x[inl], rcond=None)
-    return float(d), float(k)
+    tried = -np.inf
+    for c in order[counts >= min_beams]:
+        if c <= tried + band:
+            continue
+        tried = float(c)
+        d, k, inl = float(c), 0.0, None
+        for tol in (band, 0.5 * band):
+            inl = np.abs(x - (d + k * y)) <= tol
+            if inl.sum() < min_beams:
+                inl = None
+                break
+            A = np.column_stack([np.ones(int(inl.sum())), y[inl]])
+            (d, k), *_ = np.linalg.lstsq(A, x[inl], rcond=None)
+        if inl is not None and abs(k) <= max_slope and np.ptp(y[inl]) >= min_span:
+            return float(d), float(k)
+    return None
 
 
 def classify_beams(ranges: Sequence[float], angle_min: float, angle_increment: float,

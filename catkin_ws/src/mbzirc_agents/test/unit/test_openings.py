@@ -141,3 +141,11 @@ def test_passage_control():
     assert v[0] == 0.4 and abs(v[1] - 0.2) < 1e-9
     v = ctl.through(-0.5)                                              # far off the middle: stop, re-centre
     assert v[0] == 0.0 and v[1] == -0.4
+
+
+def test_a_side_wall_beside_the_robot_is_not_the_wall_ahead():
+    """Inside a room, a wall 0.8 m to the left along the heading (its returns crowd at short x) and the
+    window's wall 1.5 m ahead."""
+    boxes = wall(1.5, with_gaps([(-1.2, 0.8)])) + [(-3.0, 0.8, 1.5, 1.0)]
+    o = find(scan(boxes, noise=0.01, nan_rate=0.01, inf_rate=0.02, seed=2))
+    assert o is not None and abs(o.lateral + 0.2) < 0.05 and abs(o.distance - 1.5) < 0.05
