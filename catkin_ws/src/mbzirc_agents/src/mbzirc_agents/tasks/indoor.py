@@ -71,8 +71,8 @@ class SearchIndoor(AgentTask):
 
     A waypoint with an orientation is a viewpoint: the robot looks that way for `~check_fire_time`. One
     without (an all-zero quaternion) makes it turn on the spot and look along the four wall directions.
-    A leg that crosses the building's outline (in or out through a window or the door) is passed guided by
-    the laser (tasks/passage.py).
+    A leg that crosses the building's outline (in or out through a window or the door), or an interior
+    wall through a doorway the laser sees on it, is passed guided by the laser (tasks/passage.py).
     """
     INPUT_KEYS = ['floor', 'path']
 
@@ -89,7 +89,7 @@ class SearchIndoor(AgentTask):
             try:
                 if crosses_outline(a.position(), wp):
                     self.passage.to(wp)
-                else:
+                elif not self.passage.doorway(wp):
                     self.call_task_or_raise('move', {'waypoint': (wp, yaw)})
             except TaskError as e:
                 raise TaskError(f'waypoint {i + 1}: {e}')

@@ -30,6 +30,9 @@ from .uav_motion import hold_box
 
 CENTRED_SCANS = 3          # consecutive centred control steps before going through
 SEARCH_RADIUS = 2.5        # m: an opening further aside than this from the arena model's is not the one
+# Interior doorways are not in the arena model (a team does not know the interior): any opening of
+# DOORWAY_WIDTH +- DOORWAY_TOLERANCE m in a wall across an indoor leg is passed as a door.
+DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
 
 
 def nearest_opening(kind: str, point) -> Any:
@@ -112,6 +115,35 @@ class LaserPassage:
         length = max(0.5, float(np.dot(np.asarray(target[:3]) - here[:3], u)))
         self._cross(target, math.atan2(u[1], u[0]), length)
 
+    def doorway(self, target) -> bool:
+        """An indoor leg to target: when the laser sees a wall across it, nearer than target, with a
+        doorway the leg goes through, pass that doorway guided and return True (the robot is then past it,
+        at target's distance); else False: the caller moves straight as before. The scan is looked at
+        along the leg (the laser sees all around): no turn unless there is a doorway."""
+        a = self.agent
+        if not a.p.laser_openings:
+            return False
+        for _ in range(5):                           # scans reach the task only while it runs
+            msg = self._fresh_scan()
+            if msg is not None:
+                break
+            self.task.sleep(0.1)
+        if msg is None:
+            return False
+        here = a.position()
+        dx, dy = target[0] - here[0], target[1] - here[1]
+        length = math.hypot(dx, dy)
+        heading = math.atan2(dy, dx)
+        seen = find_opening(msg.ranges, msg.angle_min + here[3] - heading, msg.angle_increment, DOORWAY_WIDTH,
+                            tolerance=DOORWAY_TOLERANCE, range_min=msg.range_min,
+                            range_max=msg.range_max if msg.range_max > 0 else math.inf)
+        if seen is None or seen.distance > length - 0.3 or abs(seen.lateral) > seen.width / 2:
+            return False
+        a.backend.loginfo(f'[{self.task.name}] a doorway {seen.width:.2f} m wide {seen.distance:.1f} m ahead '
+                          f'on the leg ({seen.lateral:+.2f} m aside): passing it with the laser')
+        self.go_through('doorway', heading, length, width=seen.width, prior=seen.lateral)
+        return True
+
     def _cross(self, target, heading: float, length: float) -> None:
         """Laser-guided (go_through) when ~laser_openings, else the task's straight `move` to target."""
         if self.agent.p.laser_openings:
@@ -119,16 +151,19 @@ class LaserPassage:
         else:
             self.task.call_task_or_raise('move', {'waypoint': (tuple(target[:3]), heading)})
 
-    def go_through(self, kind: str, heading: float, length: float) -> None:
-        """From here, through the `kind` ('window' | 'door') ahead along `heading` (rad): centre on it, then
-        `length` m along the heading from here (GNSS progress). TaskError (holding) when it cannot."""
+    def go_through(self, kind: str, heading: float, length: float, width: Optional[float] = None,
+                   prior: Optional[float] = None) -> None:
+        """From here, through the `kind` ('window' | 'door' | 'doorway') ahead along `heading` (rad): centre on
+        it, then `length` m along the heading from here (GNSS progress). TaskError (holding) when it cannot.
+        Width and prior (m, where it is aside): the arena model's nearest window / door unless given."""
         a, task = self.agent, self.task
         start = a.position()
-        model = nearest_opening(kind, start)
-        if model is None:
-            raise TaskError(f'the arena model has no {kind}')
-        width = a.p.opening_width or model.width
-        prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
+        if width is None or prior is None:
+            model = nearest_opening(kind, start)
+            if model is None:
+                raise TaskError(f'the arena model has no {kind}')
+            width = a.p.opening_width or model.width
+            prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
         ctl = OpeningPassage(standoff=a.p.opening_standoff, speed=a.p.opening_speed,
                              tolerance=a.p.opening_tolerance)
         u = np.array([math.cos(heading), math.sin(heading), 0.0])
