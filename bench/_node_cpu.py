@@ -23,9 +23,10 @@ KIND_OF_EXECUTABLE = {
     "central_unit_node.py": "central_unit",
     "object_estimator": "object_estimator",
     "hector_mapping": "hector_mapping",
+    "indoor_pose": "indoor_pose",
 }
 KINDS = ("agents", "ual_sim", "fire_detector", "circle_detector", "central_unit", "object_estimator",
-         "hector_mapping", "others")
+         "hector_mapping", "indoor_pose", "others")
 TICKS_PER_S = os.sysconf("SC_CLK_TCK")
 
 

@@ -18,7 +18,8 @@ import pytest
 
 SRC = pathlib.Path(__file__).resolve().parents[1] / "catkin_ws" / "src"
 NODE_SCRIPTS = ["hector_mapping/scripts/hector_mapping", "ual_sim/scripts/ual_sim_node",
-                "fire_detector/scripts/fire_detector", "circle_detector/scripts/circle_detector"]
+                "fire_detector/scripts/fire_detector", "circle_detector/scripts/circle_detector",
+                "indoor_localization/scripts/indoor_pose"]
 COUNT_THREADS = ("import numpy, os\n"
                  "a = numpy.ones((512, 512))\n"
                  "for _ in range(5): a @ a\n"

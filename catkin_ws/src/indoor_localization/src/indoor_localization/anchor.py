@@ -1,0 +1,219 @@
+"""The robot's pose in the arena frame from its SLAM pose, anchored by its last good GNSS fixes (no ROS).
+
+hector_mapping gives the robot's pose in its own map frame (the pose at its first scan), which stays
+consistent indoors; the UAL's reported pose is in the arena frame but follows GNSS only outdoors (indoors it
+dead-reckons and drifts). While both are valid, every SLAM pose is paired with the reported pose at the same
+stamp, and the rigid 2D transform arena <- map is fitted over the last `anchor_window` seconds of pairs:
+its rotation from the headings (the UAL's yaw is the compass's, good everywhere; a fit on positions alone is
+ill-conditioned over a few metres of flight), its translation from the positions. When the fix is lost the
+anchor freezes, and the robot's pose is the frozen anchor applied to the SLAM pose. Only the last seconds
+before entering count (the robot is at the window then, where the laser sees the facade and the room), so a
+SLAM pose that wandered outdoors, far from anything, does not bias the anchor.
+
+Sources (`IndoorPose.source`): "gnss" while the UAL reports a fix, "slam" while it does not and the anchored
+SLAM pose is valid, "none" when neither: no fix and no anchor, the SLAM pose silent for longer than
+`slam_timeout`, or a SLAM pose that jumped (faster than the robot can move) since the fix was lost; "none"
+stays until the fix returns, since a jumped SLAM pose is in another frame than the anchor's.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+GNSS, SLAM, NONE = "gnss", "slam", "none"
+
+
+def wrap(a: float) -> float:
+    """Angle in [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@dataclass(frozen=True)
+class Params:
+    anchor_window: float = 3.0     # s of paired poses (GNSS valid) the anchor is fitted over
+    min_pairs: int = 10            # pairs needed for a first anchor
+    max_pair_gap: float = 0.1      # s: a SLAM pose is paired only between two reported poses this close
+    loss_guard: float = 0.2        # s: pairs this close before a reported loss of fix are dropped
+    slam_timeout: float = 1.0      # s without a SLAM pose while the fix is lost: source "none"
+    max_speed: float = 3.0         # m/s: a SLAM step faster than this (+ jump_margin) is a jump
+    max_yaw_rate: float = 4.0      # rad/s: likewise for the heading (+ 0.3 rad)
+    jump_margin: float = 0.3       # m
+
+
+@dataclass(frozen=True)
+class Anchor:
+    """arena <- map: p_arena = R(theta) p_map + t; yaw_arena = yaw_map + theta."""
+    theta: float
+    tx: float
+    ty: float
+    residual: float = 0.0          # m: RMS position misfit of the pairs it was fitted on
+    pairs: int = 0
+
+    def apply(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+        c, s = math.cos(self.theta), math.sin(self.theta)
+        return c * x - s * y + self.tx, s * x + c * y + self.ty, wrap(yaw + self.theta)
+
+
+def fit_anchor(slam: np.ndarray, arena: np.ndarray) -> Anchor:
+    """Fit arena <- map on (N, 3) rows (x, y, yaw) of paired poses: rotation = circular mean of the heading
+    differences, translation = mean position residual after rotating."""
+    d = arena[:, 2] - slam[:, 2]
+    theta = math.atan2(float(np.mean(np.sin(d))), float(np.mean(np.cos(d))))
+    c, s = math.cos(theta), math.sin(theta)
+    rot = np.column_stack((c * slam[:, 0] - s * slam[:, 1], s * slam[:, 0] + c * slam[:, 1]))
+    t = (arena[:, :2] - rot).mean(axis=0)
+    res = arena[:, :2] - rot - t
+    return Anchor(theta, float(t[0]), float(t[1]), float(np.sqrt((res ** 2).sum(axis=1).mean())), len(slam))
+
+
+class ReportedPoses:
+    """A short history of the UAL's reported poses (t, x, y, z, yaw), interpolated at a SLAM stamp."""
+
+    def __init__(self, horizon: float = 2.0):
+        self.horizon = horizon
+        self.poses: deque = deque()
+
+    def add(self, t: float, x: float, y: float, z: float, yaw: float) -> None:
+        if self.poses and t < self.poses[-1][0]:
+            self.poses.clear()                # time went back (a restarted simulation): start again
+        self.poses.append((t, x, y, z, yaw))
+        while self.poses and self.poses[0][0] < t - self.horizon:
+            self.poses.popleft()
+
+    def at(self, t: float, max_gap: float) -> Optional[tuple]:
+        """(x, y, z, yaw) at t, interpolated between the two reported poses around it (at most max_gap
+        apart); None when t is not covered."""
+        prev = None
+        for p in self.poses:
+            if p[0] >= t:
+                if p[0] == t:
+                    return p[1:]
+                if prev is None or p[0] - prev[0] > max_gap:
+                    return None
+                a = (t - prev[0]) / (p[0] - prev[0])
+                x, y, z = (prev[i] + a * (p[i] - prev[i]) for i in (1, 2, 3))
+                return x, y, z, wrap(prev[4] + a * wrap(p[4] - prev[4]))
+            prev = p
+        return None
+
+    def latest(self) -> Optional[tuple]:
+        return self.poses[-1] if self.poses else None
+
+
+@dataclass
+class Output:
+    """One anchored pose in the arena frame (z is the UAL's: its height holds indoors)."""
+    t: float
+    x: float
+    y: float
+    z: float
+    yaw: float
+    source: str
+
+
+class IndoorPose:
+    """Feed it the UAL's reported poses, its GNSS status and the SLAM poses (any order, stamps in seconds);
+    it keeps the anchor and says which source is valid."""
+
+    def __init__(self, params: Params = Params()):
+        self.p = params
+        self.reported = ReportedPoses()
+        self.pairs: deque = deque()           # (t, slam x, y, yaw, arena x, y, yaw)
+        self.anchor: Optional[Anchor] = None
+        self.gnss_valid = True                # until the UAL says otherwise (its status is latched)
+        self.lost_at: Optional[float] = None  # when the fix was lost (None: it is valid)
+        self.jumped = False                   # the SLAM pose jumped since the fix was lost
+        self.last_slam: Optional[tuple] = None  # (t, x, y, yaw) in the map frame
+        self.events: list[str] = []           # what a node should log (taken by pop_events)
+
+    # ---------------------------------------------------------------- inputs
+    def on_reported(self, t: float, x: float, y: float, z: float, yaw: float) -> None:
+        vals = (t, x, y, z, yaw)
+        if not all(math.isfinite(v) for v in vals):
+            self.events.append("ignoring a reported pose with NaN/inf")
+            return
+        self.reported.add(*vals)
+
+    def on_gnss(self, t: float, valid: bool) -> None:
+        if valid == self.gnss_valid:
+            return
+        self.gnss_valid = valid
+        if not valid:
+            self.lost_at = t
+            while self.pairs and self.pairs[-1][0] > t - self.p.loss_guard:
+                self.pairs.pop()
+            if len(self.pairs) >= self.p.min_pairs:
+                self._fit()
+            self.jumped = False
+            a = self.anchor
+            self.events.append("GNSS lost: " + (
+                f"anchor frozen (theta {a.theta:.3f} rad, t ({a.tx:.2f}, {a.ty:.2f}) m, fit rms {a.residual:.3f} m "
+                f"over {a.pairs} pairs)" if a is not None else "no anchor yet: no valid pose until the fix returns"))
+        else:
+            self.lost_at = None
+            self.pairs.clear()                # pairs start again on the returned fix
+            self.events.append("GNSS fix regained")
+
+    def on_slam(self, t: float, x: float, y: float, yaw: float) -> Optional[Output]:
+        """A SLAM pose (map frame); returns the anchored pose in the arena frame, or None without anchor."""
+        if not all(math.isfinite(v) for v in (t, x, y, yaw)):
+            self.events.append("ignoring a SLAM pose with NaN/inf")
+            return None
+        if self._is_jump(t, x, y, yaw):
+            self.events.append(f"SLAM pose jumped at t={t:.2f} s")
+            if self.gnss_valid:
+                self.pairs.clear()            # its frame changed (a reset?): fit the anchor again
+            else:
+                self.jumped = True
+        self.last_slam = (t, x, y, yaw)
+        rep = self.reported.at(t, self.p.max_pair_gap)
+        if self.gnss_valid and rep is not None:
+            self.pairs.append((t, x, y, yaw, rep[0], rep[1], rep[3]))
+            while self.pairs and self.pairs[0][0] < t - self.p.anchor_window:
+                self.pairs.popleft()
+            if len(self.pairs) >= self.p.min_pairs:
+                self._fit()
+        if self.anchor is None:
+            return None
+        ax, ay, ayaw = self.anchor.apply(x, y, yaw)
+        if rep is not None:
+            z = rep[2]
+        else:
+            last = self.reported.latest()
+            z = last[3] if last is not None else float("nan")
+        return Output(t, ax, ay, z, ayaw, self.source(t))
+
+    # ---------------------------------------------------------------- state
+    def source(self, now: float) -> str:
+        if self.gnss_valid:
+            return GNSS
+        if self.anchor is None or self.jumped or self.last_slam is None:
+            return NONE
+        if now - self.last_slam[0] > self.p.slam_timeout:
+            return NONE
+        return SLAM
+
+    def pop_events(self) -> list[str]:
+        ev, self.events = self.events, []
+        return ev
+
+    def _fit(self) -> None:
+        a = np.array(self.pairs, dtype=float)
+        self.anchor = fit_anchor(a[:, 1:4], a[:, 4:7])
+
+    def _is_jump(self, t: float, x: float, y: float, yaw: float) -> bool:
+        if self.last_slam is None:
+            return False
+        t0, x0, y0, yaw0 = self.last_slam
+        dt = max(t - t0, 0.0)
+        p = self.p
+        return (math.hypot(x - x0, y - y0) > p.max_speed * dt + p.jump_margin
+                or abs(wrap(yaw - yaw0)) > p.max_yaw_rate * dt + 0.3)
+
+
+__all__ = ["GNSS", "SLAM", "NONE", "Params", "Anchor", "fit_anchor", "ReportedPoses", "Output", "IndoorPose",
+           "wrap"]

@@ -1,0 +1,149 @@
+"""The anchored indoor pose (anchor.py) without ROS: fitting arena <- map, pairing at the SLAM stamps, and
+which source is valid through a flight in through a window and out again."""
+import math
+
+import numpy as np
+import pytest
+
+from indoor_localization.anchor import (GNSS, NONE, SLAM, Anchor, IndoorPose, Params, ReportedPoses,
+                                        fit_anchor, wrap)
+
+TRUE_ANCHOR = Anchor(theta=0.8, tx=12.0, ty=-3.0)      # arena <- map of the simulated SLAM
+
+
+def to_map(x, y, yaw):
+    """The SLAM pose of a robot at arena pose (x, y, yaw): the inverse of TRUE_ANCHOR."""
+    a = TRUE_ANCHOR
+    c, s = math.cos(a.theta), math.sin(a.theta)
+    dx, dy = x - a.tx, y - a.ty
+    return c * dx + s * dy, -s * dx + c * dy, wrap(yaw - a.theta)
+
+
+def truth(t):
+    """A path: towards the building along +x, in through the window at t = 10 s, around the room, out."""
+    if t < 10.0:
+        return 4.0 + 1.0 * t, 12.5, 0.0
+    if t < 30.0:
+        a = (t - 10.0) / 20.0 * 2 * math.pi
+        return 14.0 + 2.0 * math.sin(a), 12.5 + 2.0 * (1 - math.cos(a)), wrap(a)
+    return 14.0 - 1.0 * (t - 30.0), 12.5, math.pi
+
+
+def fly(core, t_end, bias, slam_noise=0.0, rng=None, lost=(10.0, 30.0), slam_until=math.inf, jump_at=None,
+        drift_rate=(0.05, -0.03)):
+    """Feed the core: reported poses at 30 Hz (truth + bias outdoors, + a growing drift indoors), the GNSS
+    status, SLAM poses at 15 Hz. Returns [(t, output, truth)]."""
+    out = []
+    gnss = True
+    for k in range(int(t_end * 30) + 1):
+        t = k / 30.0
+        x, y, yaw = truth(t)
+        indoors = lost[0] <= t < lost[1]
+        if indoors == gnss:
+            gnss = not indoors
+            core.on_gnss(t, gnss)
+        dx, dy = bias
+        if indoors:
+            dx, dy = dx + drift_rate[0] * (t - lost[0]), dy + drift_rate[1] * (t - lost[0])
+        core.on_reported(t, x + dx, y + dy, 7.5, yaw)
+        if k % 2 == 0 and t < slam_until:
+            mx, my, myaw = to_map(x, y, yaw)
+            if jump_at is not None and t >= jump_at:
+                mx += 2.0
+            if slam_noise:
+                mx, my = mx + rng.normal(0, slam_noise), my + rng.normal(0, slam_noise)
+            o = core.on_slam(t, mx, my, myaw)
+            out.append((t, o, (x, y, yaw)))
+    return out
+
+
+def test_fit_anchor_recovers_the_transform_from_noisy_pairs():
+    rng = np.random.default_rng(1)
+    arena = np.column_stack([rng.uniform(0, 20, 50), rng.uniform(0, 20, 50), rng.uniform(-3, 3, 50)])
+    slam = np.array([to_map(*p) for p in arena])
+    noisy = arena + np.column_stack([rng.normal(0, 0.03, (50, 2)), rng.normal(0, 0.01, 50)])
+    a = fit_anchor(slam, noisy)
+    assert a.theta == pytest.approx(TRUE_ANCHOR.theta, abs=0.01)
+    assert (a.tx, a.ty) == pytest.approx((TRUE_ANCHOR.tx, TRUE_ANCHOR.ty), abs=0.1)
+    assert 0.02 < a.residual < 0.08 and a.pairs == 50
+    assert a.apply(*slam[0])[:2] == pytest.approx(arena[0, :2], abs=0.15)
+
+
+def test_reported_poses_interpolate_across_the_yaw_wrap_and_refuse_gaps():
+    r = ReportedPoses()
+    r.add(1.0, 0.0, 0.0, 1.0, math.pi - 0.1)
+    r.add(1.1, 1.0, 2.0, 2.0, -math.pi + 0.1)
+    x, y, z, yaw = r.at(1.05, 0.2)
+    assert (x, y, z) == pytest.approx((0.5, 1.0, 1.5))
+    assert abs(wrap(yaw - math.pi)) < 1e-9
+    assert r.at(1.05, 0.05) is None            # the two poses are too far apart
+    assert r.at(1.2, 0.2) is None              # not covered yet
+    assert r.at(1.1, 0.2) == (1.0, 2.0, 2.0, -math.pi + 0.1)
+
+
+def test_through_the_window_and_out_again():
+    """Outdoors the anchor follows GNSS (source gnss); indoors it is frozen and the pose is the anchored SLAM
+    pose (source slam), off the truth by the GNSS bias at the window only, however the UAL's dead reckoning
+    drifts; outside again the source is gnss."""
+    core = IndoorPose()
+    bias = (0.4, -0.3)
+    out = fly(core, 40.0, bias, 0.01, np.random.default_rng(2))
+    src = [o.source for _, o, _ in out if o is not None]
+    assert src[0] == GNSS and SLAM in src and src[-1] == GNSS
+    first = next(i for i, (_, o, _) in enumerate(out) if o is not None)
+    assert out[first][0] < 1.0                 # anchored after min_pairs SLAM poses
+    inside = [(o, tr) for t, o, tr in out if 10.5 < t < 29.5]
+    assert all(o.source == SLAM for o, _ in inside)
+    err = np.array([[o.x - tr[0] - bias[0], o.y - tr[1] - bias[1]] for o, tr in inside])
+    assert np.abs(err).max() < 0.05            # the SLAM noise (1 cm) averaged into the anchor, nothing more
+    assert max(abs(wrap(o.yaw - tr[2])) for o, tr in inside) < 0.01
+    assert all(o.z == pytest.approx(7.5) for o, _ in inside)
+    events = core.pop_events()
+    assert any(e.startswith("GNSS lost: anchor frozen") for e in events)
+    assert "GNSS fix regained" in events
+
+
+def test_silent_slam_indoors_is_no_source_until_it_speaks_again():
+    core = IndoorPose()
+    fly(core, 15.0, (0.0, 0.0), slam_until=12.0)
+    assert core.source(12.5) == SLAM
+    assert core.source(13.5) == NONE           # > slam_timeout without a SLAM pose
+    x, y, yaw = to_map(*truth(15.0))
+    o = core.on_slam(15.0, x, y, yaw)
+    assert o.source == SLAM
+
+
+def test_a_slam_jump_indoors_is_no_source_until_the_fix_returns():
+    core = IndoorPose()
+    out = fly(core, 40.0, (0.0, 0.0), jump_at=20.0)
+    after = [o.source for t, o, _ in out if 20.0 <= t < 30.0]
+    assert after and set(after) == {NONE}
+    assert [o.source for t, o, _ in out if t > 31.0][-1] == GNSS
+    assert any("jumped" in e for e in core.pop_events())
+
+
+def test_a_slam_jump_outdoors_refits_the_anchor():
+    """Outdoors the SLAM frame changing (a map reset) only restarts the fit: after a window the anchored
+    pose is right again."""
+    core = IndoorPose()
+    out = fly(core, 9.9, (0.0, 0.0), jump_at=4.0, lost=(100.0, 100.0))
+    late = [(o, tr) for t, o, tr in out if t > 4.0 + Params().min_pairs / 15.0 + 0.2]
+    assert all(o.source == GNSS for o, _ in late)
+    assert max(math.hypot(o.x - tr[0], o.y - tr[1]) for o, tr in late) < 0.01
+
+
+def test_lost_before_any_anchor_gives_no_pose():
+    core = IndoorPose()
+    core.on_gnss(0.0, False)
+    core.on_reported(0.0, 1.0, 2.0, 3.0, 0.0)
+    assert core.on_slam(0.0, 0.0, 0.0, 0.0) is None
+    assert core.source(0.1) == NONE
+    assert "no anchor yet" in core.pop_events()[0]
+
+
+def test_bad_input_is_ignored_with_a_message():
+    core = IndoorPose()
+    core.on_reported(0.0, float("nan"), 0.0, 0.0, 0.0)
+    assert core.reported.latest() is None
+    assert core.on_slam(0.0, 0.0, float("inf"), 0.0) is None
+    assert all(e.startswith("ignoring") for e in core.pop_events())
