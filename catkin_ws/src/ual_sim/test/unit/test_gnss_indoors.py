@@ -147,3 +147,12 @@ def test_outdoors_nothing_changes_when_the_switch_is_on(world):
         for rid in off.robots:
             assert np.array_equal(off.reported_pose(off.robots[rid]), on.reported_pose(on.robots[rid]))
             assert on.gnss_valid(on.robots[rid])
+
+
+def test_launch_switch_overrides_the_profile_or_keeps_it():
+    from ual_sim.node import SimNode
+    parse = SimNode._denied_indoors_override
+    assert parse("") is None and parse(None) is None
+    assert parse(True) is True and parse(False) is False
+    assert parse("true") is True and parse("False") is False
+    assert parse("maybe") is None                        # logged as an error; the profile's value stays
