@@ -30,7 +30,7 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     out = os.path.join(out_root, f"seed_{seed}")
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
            f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1",
-           f"UNCERTAINTY={args.uncertainty}"]
+           f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SLAM={int(getattr(args, 'indoor_slam', False))}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sampler = NodeCpuSampler(proc.pid).start()

@@ -3,16 +3,18 @@
 #   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
 #                        [GCS=1] [GCS_PORT=8088]   (GCS=0: no web ground station)
 #                        [UNCERTAINTY=ideal|realistic]   (the trial's uncertainty, ual_sim README)
+#                        [INDOOR_SLAM=0|1]   (hector_mapping + indoor_pose per indoor robot, mbzirc_launchers README)
 # Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
 # mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
 # port so it never clashes with another roscore on this machine.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
+INDOOR_SLAM=0
 SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
-    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*) declare "$kv" ;;
+    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*|INDOOR_SLAM=*) declare "$kv" ;;
     *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
   esac
 done
@@ -36,7 +38,8 @@ echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAI
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
-  duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" > "$LOG" 2>&1 &
+  duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" \
+  indoor_slam:="$([ "$INDOOR_SLAM" = 1 ] && echo true || echo false)" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
 GCS_PID=""
 if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own launch: it never ends the trial)
