@@ -73,24 +73,25 @@ def wall_boxes(z, shift=(0.0, 0.0), openings=None):
 
 
 class LaserScene:
-    """Publishes the fake UAL's laser at 10 Hz (sim clock) into an agent: ray cast from its true position
-    against `boxes` (default: the arena model's walls at its height, shifted by `shift`), with the
-    realistic profile's noise and dropouts unless `noisy` is False; `blind` sends every beam NaN.
+    """Publishes the fake UAL's laser and altimeter at 10 Hz (sim clock) into an agent: ray cast from its
+    true position against `boxes` (default: the arena model's walls at its height, shifted by `shift`), with
+    the realistic profile's noise and dropouts unless `noisy` is False; `blind` sends every beam NaN.
 
-    Args: be (FakeBackend), ual (FakeUal), shift (m, x, y), laser_z (m above the robot's z).
+    Args: be (FakeBackend), ual (FakeUal), shift (m, x, y), laser_z (m above the robot's z), z_shift (m:
+    the whole world, ground included, is that much higher than the fake UAL's z frame: a vertical GNSS bias).
     """
 
-    def __init__(self, be, ual, shift=(0.0, 0.0), laser_z=0.1, noisy=True, seed=0):
-        from sensor_msgs.msg import LaserScan
-        self.be, self.ual, self.shift, self.laser_z = be, ual, shift, laser_z
+    def __init__(self, be, ual, shift=(0.0, 0.0), laser_z=0.1, noisy=True, seed=0, z_shift=0.0):
+        from sensor_msgs.msg import LaserScan, Range
+        self.be, self.ual, self.shift, self.laser_z, self.z_shift = be, ual, shift, laser_z, z_shift
         self.noisy, self.blind, self.stop = noisy, False, False
         self.boxes = None
         self.rng = np.random.default_rng(seed)
-        self._msg = LaserScan
+        self._msg, self._range = LaserScan, Range
         be.clock.start_thread(self._loop, name='laser scene')
 
     def ranges(self):
-        z = float(self.ual.pos[2]) + self.laser_z
+        z = float(self.ual.pos[2]) + self.laser_z - self.z_shift
         boxes = self.boxes if self.boxes is not None else wall_boxes(z, self.shift)
         if self.noisy:
             return cast(self.ual.pos[:2], self.ual.yaw, boxes, 0.01, 0.01, 0.02, self.rng)
@@ -103,4 +104,7 @@ class LaserScene:
                 r = np.full(BEAMS, np.nan) if self.blind else self.ranges()
                 cb(self._msg(angle_min=ANGLE_MIN, angle_increment=INC, range_min=0.15, range_max=25.0,
                              ranges=list(r)))
+            alt = self.be.subs.get('altimeter')
+            if alt is not None:            # height above the ground (the test worlds' places have no roof below)
+                alt(self._range(range=float(self.ual.pos[2]) - self.z_shift))
             self.be.clock.sleep(0.1)

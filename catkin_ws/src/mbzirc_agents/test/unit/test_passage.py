@@ -36,7 +36,7 @@ class Track:
     (the roles of x and y swapped)."""
 
     def __init__(self, be, ual, band, radius, x, axis=1):
-        self.xs, self.stop = [], False
+        self.xs, self.zs, self.stop = [], [], False
         lo, hi = band[0] - radius, band[1] + radius
         along = 1 - axis                            # the wall runs along the other axis
 
@@ -44,6 +44,7 @@ class Track:
             while not self.stop:
                 if lo <= ual.pos[axis] <= hi and abs(ual.pos[along] - x) < 4.0:
                     self.xs.append(float(ual.pos[along]))
+                    self.zs.append(float(ual.pos[2]))
                 be.clock.sleep(0.02)
         be.clock.start_thread(loop, name='track')
 
@@ -74,12 +75,17 @@ def enter(be, timeout=120):
 
 
 def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav):
+    """A metre aside, and the window 0.7 m lower than its GNSS height says (z 5.8-7.8 in its frame): the
+    altimeter brings it down to the window's middle height."""
     agent, ual, be, scene = uav
+    scene.z_shift = -0.7
     track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
     s, status = enter(be)
     assert status == 'succeeded', s.result.message
     true_x = WINDOW_X - 1.0
     assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+    zs = [z + 0.7 for z in track.zs]                          # in the world's frame
+    assert 6.5 + UAV_R < min(zs) and max(zs) < 8.5 - UAV_R, (min(zs), max(zs))
     assert ual.pos[1] < WALL_Y[0] - UAV_R, f'not inside: {ual.pos}'
     assert any('centred on the window' in m for m in be.infos), be.infos
 
@@ -177,3 +183,15 @@ def test_the_ugv_passes_an_interior_doorway_the_laser_sees_on_its_leg(ugv):
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.5 + UGV_R, 12.5 - UGV_R), (min(track.xs), max(track.xs))
     assert ual.pos[0] > 17.9 + UGV_R, f'not through: {ual.pos}'
+
+
+def test_true_height_from_the_altimeter():
+    """The surface under the reading is the arena model's one that best explains it: the ground in front of
+    facade A, the extension's roof (4.5 m) in front of facade D, even when the GNSS puts the UAV 0.5 m
+    beside that roof, the first floor inside; a reading no surface explains is not used."""
+    from mbzirc_agents.tasks.passage import true_height
+    assert abs(true_height(7.2, (15.5, 21.0, 7.5)) - 7.2) < 1e-9
+    assert abs(true_height(3.3, (25.2, 14.5, 7.5)) - 7.8) < 1e-9
+    assert abs(true_height(3.3, (23.8, 14.5, 7.5)) - 7.8) < 1e-9      # GNSS over the tower's edge
+    assert abs(true_height(2.4, (15.5, 18.0, 7.5)) - 7.4) < 1e-9      # inside, over the first floor
+    assert true_height(1.0, (15.5, 21.0, 7.5)) is None                 # something 6 m under the UAV?

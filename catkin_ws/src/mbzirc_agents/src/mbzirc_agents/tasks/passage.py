@@ -14,13 +14,13 @@ nearer than `~opening_keep_off` (control.keep_off_return).
 from __future__ import annotations
 
 import math
-from typing import Any, Optional, Tuple
+from typing import Any, Optional, Sequence, Tuple
 
 import numpy as np
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import LaserScan, Range
 from mbzirc_arena.boxes import swept_box
 from mbzirc_arena.buildings import in_footprint, standing_at
-from mbzirc_arena.c3 import ARENA
+from mbzirc_arena.c3 import ARENA, FLOOR_HEIGHTS
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
@@ -30,6 +30,8 @@ from .uav_motion import hold_box
 
 CENTRED_SCANS = 3          # consecutive centred control steps before going through
 SEARCH_RADIUS = 2.5        # m: an opening further aside than this from the arena model's is not the one
+VERTICAL_GAIN, VERTICAL_VMAX = 1.0, 0.3    # 1/s, m/s: a UAV's climb or descent onto a window's height
+VERTICAL_TOLERANCE = 0.15                   # m off a window's middle height that counts as centred
 # Interior doorways are not in the arena model (a team does not know the interior): any opening of
 # DOORWAY_WIDTH +- DOORWAY_TOLERANCE m in a wall across an indoor leg is passed as a door.
 DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
@@ -41,6 +43,23 @@ def nearest_opening(kind: str, point) -> Any:
     if not found:
         return None
     return min(found, key=lambda o: math.dist(o.centre, point[:3]))
+
+
+def true_height(reading: float, gnss: Sequence[float], margin: float = 1.0, max_error: float = 1.2
+                ) -> Optional[float]:
+    """Arena z of base_link from an altimeter reading (m above the surface below) and the GNSS position:
+    the surface is the one of the arena model near (x, y) (the ground, or the top or a storey's floor of a
+    building whose outline grown by margin holds it: the GNSS error) that best explains the reading (the
+    candidates are metres apart, the GNSS height is off by decimetres); None when none is within max_error.
+
+    Why: the GNSS height is off by decimetres and a window is 2 m tall. In front of a window the surface is
+    the ground or the extension's roof, behind it the storey's floor."""
+    x, y, z = gnss[0], gnss[1], gnss[2]
+    near = [b for b in C.BUILDINGS if b[0] - margin <= x <= b[2] + margin and b[1] - margin <= y <= b[3] + margin]
+    surfaces = [C.ARENA_BOX[2]] + [b[4] for b in near if b[4] < z] + [
+        f for b in near for f in FLOOR_HEIGHTS if f < min(z, b[4])]
+    best = min(surfaces, key=lambda s: abs(reading + s - z))
+    return reading + best if abs(reading + best - z) <= max_error else None
 
 
 def crosses_outline(a, b) -> bool:
@@ -60,7 +79,10 @@ class LaserPassage:
         self.agent = task.agent
         self._scan: Optional[Tuple[Any, float]] = None     # (LaserScan, receive time)
         self._blind_since: Optional[float] = None
+        self._altitude: Optional[Tuple[float, float]] = None   # (altimeter m, receive time)
         task.iface.add_subscriber(task.name, 'scan', LaserScan, self._on_scan)
+        if self.agent.ROBOT_TYPE == 'uav':
+            task.iface.add_subscriber(task.name, 'altimeter', Range, self._on_altimeter)
 
     # ---- the laser --------------------------------------------------------------------------------
     def _on_scan(self, msg: LaserScan) -> None:
@@ -77,6 +99,17 @@ class LaserPassage:
             return
         self._blind_since = None
         self._scan = (msg, now)
+
+    def _on_altimeter(self, msg: Range) -> None:
+        """Keep the latest valid reading (NaN dropouts and out-of-range readings are skipped)."""
+        if math.isfinite(msg.range) and msg.range > 0:
+            self._altitude = (float(msg.range), self.agent.backend.now())
+
+    def height_now(self) -> Optional[float]:
+        """The UAV's true height (arena z of base_link) from a fresh altimeter reading (true_height), else None."""
+        if self._altitude is None or self.agent.backend.now() - self._altitude[1] > C.SCAN_MAX_AGE:
+            return None
+        return true_height(self._altitude[0], self.agent.position()[:3])
 
     def _fresh_scan(self) -> Optional[Any]:
         """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
@@ -158,12 +191,14 @@ class LaserPassage:
         Width and prior (m, where it is aside): the arena model's nearest window / door unless given."""
         a, task = self.agent, self.task
         start = a.position()
+        height = None            # the window's middle height, which a UAV centres on with its altimeter
         if width is None or prior is None:
             model = nearest_opening(kind, start)
             if model is None:
                 raise TaskError(f'the arena model has no {kind}')
             width = a.p.opening_width or model.width
             prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
+            height = model.centre[2] if kind == 'window' else None
         ctl = OpeningPassage(standoff=a.p.opening_standoff, speed=a.p.opening_speed,
                              tolerance=a.p.opening_tolerance)
         u = np.array([math.cos(heading), math.sin(heading), 0.0])
@@ -173,7 +208,7 @@ class LaserPassage:
             a.move_to(task, start[:3], heading, f'turning to face the {kind}')
         try:
             self._last: Optional[Tuple[SeenOpening, float]] = None
-            expected = self._centre(kind, heading, width, prior, ctl)
+            expected = self._centre(kind, heading, width, prior, ctl, height)
             self._through(kind, heading, width, expected, ctl, start, u, length)
         finally:
             a.hold()
@@ -192,11 +227,11 @@ class LaserPassage:
                                 f'(> {allowed:.2f} m): not going through')
         self._last = (seen, now)
 
-    def _command(self, v_body: np.ndarray, heading: float, msg: Optional[Any]) -> None:
-        """Send a body-frame (vx, vy) as a world velocity, facing `heading`, kept off laser returns."""
+    def _command(self, v_body: np.ndarray, heading: float, msg: Optional[Any], vz: float = 0.0) -> None:
+        """Send a body-frame (vx, vy) and vz as a world velocity, facing `heading`, kept off laser returns."""
         a = self.agent
         p = a.position()
-        v = body_to_world((float(v_body[0]), float(v_body[1]), 0.0), p[3])
+        v = body_to_world((float(v_body[0]), float(v_body[1]), vz), p[3])
         if msg is not None:
             d, ang = nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
             v = keep_off_return(v, p[3], d, ang, a.p.opening_keep_off)
@@ -206,8 +241,23 @@ class LaserPassage:
         a = self.agent
         a.send_velocity((0.0, 0.0, 0.0), yaw_rate_to(a.position()[3], heading))
 
-    def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage) -> float:
-        """Find the opening and centre on it; its lateral (m, body y) when centred."""
+    def _vertical(self, height: Optional[float]) -> Tuple[float, bool]:
+        """(vz, at the height) towards a window's middle height with the altimeter; (0, True) without a
+        height to keep or a fresh reading (then the GNSS height is all there is; warned, throttled)."""
+        if height is None:
+            return 0.0, True
+        z = self.height_now()
+        if z is None:
+            self.agent.backend.logerr_throttle(5.0, f'[{self.task.name}] no usable altimeter reading: the '
+                                                    'window is passed at the GNSS height')
+            return 0.0, True
+        dz = height - z
+        return float(np.clip(VERTICAL_GAIN * dz, -VERTICAL_VMAX, VERTICAL_VMAX)), abs(dz) <= VERTICAL_TOLERANCE
+
+    def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
+                height: Optional[float] = None) -> float:
+        """Find the opening and centre on it (and, a window with the altimeter, on its middle height);
+        its lateral (m, body y) when centred."""
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
         t0 = a.backend.now()
@@ -233,14 +283,15 @@ class LaserPassage:
             self._check_jump(seen, kind, ctl.lateral_vmax)
             expected = seen.lateral
             yaw_ok = abs(math.remainder(a.position()[3] - heading, 2 * math.pi)) <= a.p.yaw_tolerance
-            centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok else 0
+            vz, z_ok = self._vertical(height)
+            centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok and z_ok else 0
             if centred >= CENTRED_SCANS:
                 a.backend.loginfo(f'[{task.name}] centred on the {kind} ({seen.width:.2f} m wide, '
                                   f'{seen.distance:.2f} m ahead, {seen.lateral:+.2f} m aside): going through')
                 return seen.lateral
             task.feedback('CENTERING', f'{kind} {seen.width:.2f} m wide, {seen.distance:.2f} m ahead, '
                                        f'{seen.lateral:+.2f} m aside')
-            self._command(ctl.centring(seen.lateral, seen.distance), heading, msg)
+            self._command(ctl.centring(seen.lateral, seen.distance), heading, msg, vz)
             a.backend.sleep(dt)
 
     def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
