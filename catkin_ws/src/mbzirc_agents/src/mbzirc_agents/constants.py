@@ -31,6 +31,7 @@ TOWER = _arena.TOWER                  # footprints (x_min, y_min, x_max, y_max, 
 EXTENSION = _arena.EXTENSION
 BUILDINGS = list(_arena.FOOTPRINTS)
 FACADE_HOLDERS = list(_arena.FACADE_HOLDERS)
+FLOOR_HEIGHTS = tuple(_arena.FLOOR_HEIGHTS)
 
 # ---- agent defaults of the default arena (each is also a ~param of the nodes that use it) ------------------
 # Default outdoor area searched for ground fires (x_min, y_min, x_max, y_max): around the ground fire places.

@@ -97,6 +97,13 @@ class AgentParams:
     top_up_max_std: float = _param(1.0, 'm: a track is well localised for a top-up when its position std is '
                                         'at most this (above the estimator\'s ~pose_std floor, 0.7 m)')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')
+    min_clearance: float = _param(0.5, 'm: no go-to or velocity command takes a flying UAV (not taking off or '
+                                  'landing) closer to the surface below, by its altimeter (`altimeter`)')
+    clearance_fallback_margin: float = _param(1.0, 'm more clearance, on the GNSS height above the arena plan, '
+                                              'while the altimeter gives no valid reading')
+    altimeter_max_age: float = _param(0.5, 's: an older altimeter reading is stale (the fallback applies)')
+    clearance_guard: bool = _param(True, 'false: motion commands pass unbounded (as without an altimeter; '
+                                         'for comparisons)')
     pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')
     pose_jump_hold: float = _param(2.0, 's the robot holds (zero velocity) while doubting a jump; a jumped '
                                    'pose still reported after that is accepted')

@@ -404,7 +404,7 @@ class RobotAgent(Agent):
                 task.check_preempt()
                 p = self.position()
                 dxy = math.hypot(target[0] - p[0], target[1] - p[1])
-                dz = abs(target[2] - p[2]) if self.ROBOT_TYPE == 'uav' else 0.0
+                dz = abs(self.set_point_z(target) - p[2]) if self.ROBOT_TYPE == 'uav' else 0.0
                 if dxy <= tol and dz <= tol and abs(wrap_angle(yaw - p[3])) <= self.p.yaw_tolerance:
                     return True
                 if stop_when is not None and stop_when():
@@ -419,6 +419,10 @@ class RobotAgent(Agent):
         except TaskPreempted:
             self.hold()
             raise
+
+    def set_point_z(self, target: Sequence[float]) -> float:
+        """The z a go-to to target is flown to (a UAV's clearance guard may raise it)."""
+        return float(target[2])
 
     def hold(self) -> None:
         """Stop where the robot is (a waypoint at the current pose); quiet if that fails."""

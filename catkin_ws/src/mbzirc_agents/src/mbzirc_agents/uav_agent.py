@@ -1,11 +1,12 @@
 """UavAgent: the UAV's tasks on top of RobotAgent."""
 from __future__ import annotations
 
-from typing import Any, Dict
+from typing import Any, Dict, Sequence
 
 from mbzirc_comm_objs import msg as M
 
 from . import constants as C
+from .clearance_keeper import ClearanceKeeper
 from .robot_agent import RobotAgent
 from .tasks import facade as F, ground as G, indoor, uav_motion as U
 
@@ -42,12 +43,30 @@ def register_tasks(agent: Any, tasks: list, sub_tasks: Dict[str, tuple]) -> None
 
 
 class UavAgent(RobotAgent):
-    """A UAV: take-off, flight through reserved regions, facade / ground / indoor fires, refill."""
+    """A UAV: take-off, flight through reserved regions, facade / ground / indoor fires, refill.
+
+    Every go-to and velocity it sends passes its clearance guard (clearance_keeper.py): never closer than
+    ~min_clearance to the surface below by the altimeter, whatever the GNSS height says."""
     ROBOT_TYPE = 'uav'
 
     def __init__(self, agent_id: str, backend: Any, params: Dict[str, Any], namespace: str = '') -> None:
         super().__init__(agent_id, backend, params, namespace)
+        self.clearance = ClearanceKeeper(self, super().send_waypoint)
         register_tasks(self, UAV_TASKS, UAV_SUB_TASKS)
+
+    def start(self) -> None:
+        super().start()
+        self.backend.start_thread('clearance_guard', self.clearance.run)
+
+    # ---- motion through the clearance guard ----------------------------------------------------------------
+    def send_waypoint(self, x: float, y: float, z: float, yaw: float) -> None:
+        self.clearance.waypoint(x, y, z, yaw)
+
+    def send_velocity(self, v: Sequence[float], yaw_rate: float = 0.0) -> None:
+        super().send_velocity(self.clearance.velocity(v), yaw_rate)
+
+    def set_point_z(self, target: Sequence[float]) -> float:
+        return self.clearance.set_point_z(float(target[0]), float(target[1]), float(target[2]))
 
     def return_home(self) -> Any:
         """After a long heartbeat loss: go home and land (and take the reset if it comes)."""

@@ -7,7 +7,9 @@ import math
 import threading
 
 import numpy as np
+import rospy
 from geometry_msgs.msg import PoseStamped
+from sensor_msgs.msg import Range
 from mbzirc_comm_objs.srv import AskForRegionResponse, FreeRegionsResponse
 from std_msgs.msg import Float32
 from std_srvs.srv import TriggerResponse
@@ -22,6 +24,12 @@ class FakeUal:
         self.be = backend
         self.pos = np.array(pos, float)
         self.gnss_offset = np.zeros(3)   # added to the published pose only (a GNSS jump)
+        # GNSS error as the real UAL has it: added to the published pose AND the UAL flies its go-to set-points
+        # in that frame (true set-point = command - bias, moving as the bias changes), as ual_sim does
+        self.gnss_bias = np.zeros(3)
+        self.altimeter = True            # publish `altimeter` (true height above the ground at z 0), 20 Hz
+        self.altimeter_reading = None    # a fixed reading instead (NaN: an invalid one), when set
+        self.min_flying_z = np.inf       # lowest true z while flying, not taking off (ground contact: <= 0)
         self.yaw = 0.0
         self.state = State.LANDED_DISARMED
         self.goal = None
@@ -34,6 +42,7 @@ class FakeUal:
         self.waypoints = []
         self.follow_velocity = False     # opt-in: fly the agent's ual/set_velocity commands (0.3 s each)
         self._vel_seen = 0
+        self._alt_time = -np.inf
         self.lock = threading.Lock()
         h = backend.handlers
         h['ual/take_off'] = self.take_off
@@ -54,13 +63,13 @@ class FakeUal:
 
     def take_off(self, req):
         with self.lock:
-            self.goal = (self.pos + [0, 0, req.height], self.yaw)
+            self.goal = (self.pos + [0, 0, req.height] + self.gnss_bias, self.yaw)
             self.state = State.TAKING_OFF
         return TakeOffResponse()
 
     def land(self, req):
         with self.lock:
-            self.goal = (np.array([self.pos[0], self.pos[1], 0.0]), self.yaw)
+            self.goal = (np.array([self.pos[0], self.pos[1], 0.0]) + self.gnss_bias, self.yaw)
             self.state = State.LANDING
         return LandResponse()
 
@@ -96,6 +105,9 @@ class FakeUal:
                     self.pos = self.pos + v * self.speedup * dt
                 if self.goal is not None:
                     g, gy = self.goal
+                    g = g - self.gnss_bias                  # flown in the frame of the GNSS fix
+                    if self.state == State.LANDING:
+                        g[2] = 0.0                          # down to the ground, whatever the fix says
                     d = g - self.pos
                     n = np.linalg.norm(d)
                     step = 1.6 * self.speedup * dt
@@ -108,7 +120,10 @@ class FakeUal:
                             self.state = State.LANDED_DISARMED
                 if self.pump and self.water > 0:
                     self.water = max(0.0, self.water - 0.2 * self.speedup * dt)
-                pos, yaw, state, water = self.pos + self.gnss_offset, self.yaw, self.state, self.water
+                if self.state in (State.FLYING_AUTO, State.FLYING_MANUAL):
+                    self.min_flying_z = min(self.min_flying_z, self.pos[2])
+                pos, yaw, state, water = self.pos + self.gnss_offset + self.gnss_bias, self.yaw, self.state, self.water
+                height = self.pos[2] if self.altimeter_reading is None else self.altimeter_reading
             msg = PoseStamped()
             msg.header.frame_id = 'arena'
             msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = pos
@@ -120,6 +135,13 @@ class FakeUal:
                 subs['ual/state'](State(state=state))
             if 'actuators_system/water_level' in subs:
                 subs['actuators_system/water_level'](Float32(data=water))
+            now = self.be.clock.now()
+            if self.altimeter and 'altimeter' in subs and now - self._alt_time >= 0.05 - 1e-9:
+                self._alt_time = now
+                m = Range(min_range=0.05, max_range=40.0)
+                m.header.stamp = rospy.Time.from_sec(now)
+                m.range = height if height >= 0.05 or not np.isfinite(height) else -np.inf
+                subs['altimeter'](m)
             self.be.clock.sleep(dt)
 
 

@@ -1,0 +1,169 @@
+"""Clearance guard: no motion command takes a flying UAV closer than `min_clearance` to the surface below,
+whatever its GNSS height says.
+
+Why: the UAL flies to set-points in the frame of its GNSS fix, whose vertical error wanders by decimetres
+(standard GNSS, ual_sim README "Uncertainty"). A set-point 0.75 m up (facade holder A_4) then puts the
+UAV on the ground when the fix reads 0.75 m high (seen: "hit the ground" at A_4 under realistic
+uncertainty). The downward altimeter measures the true height above the surface below; the difference
+between the GNSS height above the arena plan's surface and the measured height is the vertical GNSS
+error `e` (GNSS z = true z + e). A set-point z is flown at true height z - e, so the guard keeps
+z >= surface + clearance + e.
+
+Rules:
+- a reading's surface is the one of the arena plan below the UAV (ground, a roof, a storey's floor) that
+  best explains it (closest to the last estimate of e): the candidates are metres apart, e decimetres;
+  a reading that fits none (|e| > max_gnss_error) or moves a fresh estimate by more than max_step is
+  something the plan does not know (a window sill, a robot below): not believed, and after max_age of
+  such readings the fallback applies until the readings make sense again;
+- set-points: z >= surface at the target + min_clearance + `hysteresis` + e; the caller re-sends a
+  held set-point when that bound has risen by half the hysteresis (e wanders while the UAV holds);
+- velocities: the vertical command never lets the measured height fall below min_clearance + hysteresis
+  within `horizon` s (it climbs back when below);
+- no fresh valid altimeter reading (stale, NaN, no return): e is unknown; the bounds use the GNSS height
+  with `fallback_margin` more clearance (and the caller warns, throttled).
+Pure: no ROS, no clock of its own (times are passed in), tested in test_clearance.py.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional, Sequence, Tuple
+
+
+@dataclass(frozen=True)
+class ClearanceConfig:
+    """Numbers of the guard (the first three are agent params, README "Params")."""
+    min_clearance: float = 0.5      # m of true height above the surface below, at least
+    fallback_margin: float = 1.0    # m more when the altimeter gives nothing usable (GNSS height only)
+    max_age: float = 0.5            # s: an older altimeter reading is stale
+    hysteresis: float = 0.1         # m: set-points aim this much above the clearance (see the rules)
+    horizontal_margin: float = 1.0  # m: a roof this close (xy) may be under the UAV (GNSS horizontal error)
+    max_gnss_error: float = 3.0     # m: a reading implying a larger vertical error is not believed
+    max_step: float = 0.5           # m: nor one moving a fresh estimate by more (a sill, a robot below)
+    filter_tau: float = 0.3         # s: smoothing of e (noise of the fix and of the altimeter)
+    horizon: float = 1.0            # s: a velocity may close the height to the bound in this time, not less
+
+
+def surfaces_at(x: float, y: float, footprints: Sequence[Sequence[float]], floor_heights: Sequence[float],
+                ground_z: float, roof_margin: float) -> list:
+    """Heights of the surfaces the arena plan may put under (x, y): the ground, the roof of every building
+    whose footprint grown by roof_margin holds (x, y), and the storeys' floors (those below its roof) of
+    every building whose footprint holds it (floors lie inside the walls: no margin)."""
+    out = [float(ground_z)]
+    for b in footprints:
+        x0, y0, x1, y1, top = (float(v) for v in b[:5])
+        if x0 - roof_margin <= x <= x1 + roof_margin and y0 - roof_margin <= y <= y1 + roof_margin:
+            out.append(top)
+        if x0 <= x <= x1 and y0 <= y <= y1:
+            out.extend(float(f) for f in floor_heights if ground_z < f < top)
+    return sorted(set(out))
+
+
+class ClearanceGuard:
+    """The vertical GNSS error estimated from the altimeter, and the bounds on set-points and velocities.
+
+    Not thread-safe by itself: the agent calls it under its own lock."""
+
+    def __init__(self, cfg: ClearanceConfig, footprints: Sequence[Sequence[float]],
+                 floor_heights: Sequence[float], ground_z: float = 0.0) -> None:
+        self.cfg = cfg
+        self.footprints = [tuple(b) for b in footprints]
+        self.floor_heights = tuple(floor_heights)
+        self.ground_z = float(ground_z)
+        self.error: Optional[float] = None      # e, m (GNSS z - true z), smoothed
+        self.height: Optional[float] = None     # last valid measured height above the surface, m
+        self.valid_time = -math.inf             # stamp of the last valid reading
+        self.last_problem = 'no altimeter reading yet'
+
+    # ---- input -------------------------------------------------------------------------------------------
+    def surfaces(self, x: float, y: float) -> list:
+        return surfaces_at(x, y, self.footprints, self.floor_heights, self.ground_z, self.cfg.horizontal_margin)
+
+    def on_reading(self, reading: float, stamp: float, gnss_xyz: Sequence[float]) -> None:
+        """One altimeter reading (REP 117: -inf too close, +inf no return, NaN invalid) taken at `stamp`
+        when the GNSS position was gnss_xyz."""
+        r = float(reading)
+        if math.isnan(r):
+            self.last_problem = 'invalid (NaN) reading'
+            return
+        if r == math.inf:
+            self.last_problem = 'no return (beyond the maximum range)'
+            return
+        if not all(math.isfinite(v) for v in gnss_xyz[:3]):
+            self.last_problem = 'no valid GNSS position at the reading'
+            return
+        h = max(0.0, r)                          # -inf: closer than the minimum range
+        x, y, z = (float(v) for v in gnss_xyz[:3])
+        prior = self.error if self.error is not None else 0.0
+        candidates = [z - h - s for s in self.surfaces(x, y)]
+        e = min(candidates, key=lambda c: abs(c - prior))
+        if abs(e) > self.cfg.max_gnss_error:
+            self.last_problem = (f'reading {h:.2f} m fits no surface of the plan (would mean a GNSS height '
+                                 f'error of {e:+.1f} m): something below the UAV?')
+            return
+        fresh = self.error is not None and stamp - self.valid_time <= self.cfg.max_age
+        if fresh and abs(e - self.error) > self.cfg.max_step:
+            self.last_problem = (f'reading {h:.2f} m jumps the GNSS height error estimate by '
+                                 f'{e - self.error:+.1f} m: something below the UAV (a sill, a robot)?')
+            return
+        if not fresh:
+            self.error = e                        # first reading, or fresh after a gap: no smoothing
+        else:
+            dt = max(0.0, stamp - self.valid_time)
+            a = 1.0 - math.exp(-dt / self.cfg.filter_tau) if self.cfg.filter_tau > 0 else 1.0
+            self.error += a * (e - self.error)
+        self.height, self.valid_time = h, stamp
+
+    # ---- state ---------------------------------------------------------------------------------------------
+    def fresh(self, now: float) -> bool:
+        """True when the last valid reading is at most max_age old."""
+        return now - self.valid_time <= self.cfg.max_age
+
+    def problem(self, now: float) -> str:
+        """Why the guard is on its fallback now ('' when it is not)."""
+        if self.fresh(now):
+            return ''
+        age = now - self.valid_time
+        since = 'never' if math.isinf(age) else f'for {age:.1f} s'
+        return f'no valid altimeter reading {since} (last: {self.last_problem})'
+
+    def _error_and_clearance(self, now: float) -> Tuple[float, float]:
+        """(e to correct with, clearance to keep): the altimeter's when fresh, else 0 and the fallback."""
+        if self.fresh(now) and self.error is not None:
+            return self.error, self.cfg.min_clearance + self.cfg.hysteresis
+        return 0.0, self.cfg.min_clearance + self.cfg.fallback_margin
+
+    def surface_below(self, x: float, y: float, true_z: float, clearance: float) -> float:
+        """The highest plan surface under (x, y) that a UAV at true height true_z must keep `clearance`
+        above (a surface higher than true_z + clearance is a wall beside it, not under it)."""
+        below = [s for s in self.surfaces(x, y) if s <= true_z + clearance]
+        return max(below) if below else self.ground_z
+
+    # ---- bounds --------------------------------------------------------------------------------------------
+    def min_set_point_z(self, x: float, y: float, z: float, now: float) -> float:
+        """Lowest set-point z (GNSS frame) the UAL may be sent to at (x, y) when asked for z."""
+        e, clearance = self._error_and_clearance(now)
+        s = self.surface_below(x, y, z - e, clearance)
+        return s + clearance + e
+
+    def safe_set_point_z(self, x: float, y: float, z: float, now: float) -> float:
+        """z, raised to the bound when below it."""
+        return max(float(z), self.min_set_point_z(x, y, z, now))
+
+    def height_now(self, gnss_xyz: Sequence[float], now: float) -> Tuple[float, float]:
+        """(height above the surface below, clearance to keep): measured when fresh, else the GNSS height
+        above the plan's surface with the fallback clearance."""
+        e, clearance = self._error_and_clearance(now)
+        if self.fresh(now) and self.height is not None:
+            return self.height, clearance
+        x, y, z = (float(v) for v in gnss_xyz[:3])
+        return z - self.surface_below(x, y, z, clearance), clearance
+
+    def safe_vz(self, vz: float, gnss_xyz: Sequence[float], now: float) -> float:
+        """The vertical velocity, limited so that the height does not fall below the clearance within
+        `horizon` s; a positive (climbing) command when already below it."""
+        h, clearance = self.height_now(gnss_xyz, now)
+        return max(float(vz), (clearance - h) / self.cfg.horizon)
+
+
+__all__ = ['ClearanceConfig', 'ClearanceGuard', 'surfaces_at']

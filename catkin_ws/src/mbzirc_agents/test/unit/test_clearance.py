@@ -1,0 +1,90 @@
+"""The clearance guard's rules (clearance.py), without an agent: which surfaces the arena plan puts under a
+point, the vertical GNSS error from the altimeter, the bounds on set-points and velocities, the fallback."""
+import math
+
+import pytest
+
+from mbzirc_agents import constants as C
+from mbzirc_agents.clearance import ClearanceConfig, ClearanceGuard, surfaces_at
+
+A4_STANDOFF = (23.7, 21.0)           # in front of facade holder A_4 (0.75 m up), outside every footprint
+EXT_ROOF = (30.0, 12.0)              # over the extension's roof (4.5 m)
+
+
+@pytest.fixture
+def guard():
+    return ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
+
+
+def test_surfaces_of_the_plan():
+    s = lambda x, y: surfaces_at(x, y, C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0, 1.0)  # noqa: E731
+    assert s(0.0, 0.0) == [0.0]
+    assert s(*A4_STANDOFF) == [0.0]
+    assert s(*EXT_ROOF) == [0.0, 4.5]
+    assert s(17.0, 12.0) == [0.0, 5.0, 10.0, 18.0]        # inside the tower: its storeys and its roof
+    assert s(24.0, 20.2) == [0.0, 4.5, 18.0]             # 0.7 m off both roofs: maybe over them, no storey
+
+
+def test_the_altimeter_gives_the_vertical_gnss_error(guard):
+    guard.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))        # the fix reads 0.5 m high
+    assert guard.error == pytest.approx(0.5)
+    assert guard.fresh(10.2) and not guard.fresh(10.6)
+    g2 = ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
+    g2.on_reading(1.5, 10.0, (*EXT_ROOF, 5.7))            # over the roof: 1.5 m above 4.5 m, fix 0.3 low
+    assert g2.error == pytest.approx(-0.3)
+
+
+def test_the_estimate_is_smoothed_and_restarts_after_a_gap(guard):
+    guard.on_reading(1.0, 10.0, (0.0, 0.0, 1.0))
+    guard.on_reading(1.0, 10.05, (0.0, 0.0, 1.2))         # one noisy reading: the estimate moves a little
+    assert 0.0 < guard.error < 0.1
+    guard.on_reading(1.0, 20.0, (0.0, 0.0, 1.4))          # 10 s later: taken as it is
+    assert guard.error == pytest.approx(0.4)
+
+
+def test_set_points_keep_the_clearance_above_the_true_surface(guard):
+    guard.on_reading(0.75, 10.0, (*A4_STANDOFF, 1.55))    # e = +0.8: a set-point at 0.75 is 0.05 m underground
+    z = guard.safe_set_point_z(*A4_STANDOFF, 0.75, 10.1)
+    assert z - guard.error == pytest.approx(0.5 + 0.1)     # true height: the clearance and the hysteresis
+    assert guard.safe_set_point_z(*A4_STANDOFF, 3.0, 10.1) == 3.0     # high enough: unchanged
+    guard.on_reading(1.5, 11.0, (*EXT_ROOF, 6.0))          # over the roof, e = 0
+    assert guard.safe_set_point_z(*EXT_ROOF, 4.7, 11.05) == pytest.approx(4.5 + 0.6)
+    assert guard.safe_set_point_z(*EXT_ROOF, 6.0, 11.05) == 6.0
+
+
+def test_without_a_fresh_reading_the_bound_takes_the_fallback_margin(guard):
+    assert 'never' in guard.problem(5.0)
+    assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 5.0) == pytest.approx(0.5 + 1.0)
+    guard.on_reading(0.75, 10.0, (*A4_STANDOFF, 0.75))
+    guard.on_reading(math.nan, 10.5, (*A4_STANDOFF, 0.75))
+    assert guard.problem(11.0).startswith('no valid altimeter reading for 1.0 s')
+    assert 'NaN' in guard.problem(11.0)
+    assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 11.0) == pytest.approx(1.5)
+
+
+def test_a_reading_no_surface_explains_is_not_believed(guard):
+    guard.on_reading(0.2, 10.0, (0.0, 0.0, 6.0))          # 5.8 m of error? an object under the UAV
+    assert guard.error is None and 'fits no surface' in guard.problem(10.6)
+    guard.on_reading(6.1, 11.0, (0.0, 0.0, 6.0))          # e = -0.1
+    guard.on_reading(5.0, 11.05, (0.0, 0.0, 6.0))         # a window sill 1.1 m up passes under the UAV
+    assert guard.error == pytest.approx(-0.1) and guard.fresh(11.1)
+    assert 'jumps' in guard.last_problem
+    guard.on_reading(5.0, 11.6, (0.0, 0.0, 6.0))          # persists past max_age: believed (stale before)
+    assert guard.error == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize('height, vz, expected', [
+    (2.0, -0.5, -0.5),              # far above the bound: as commanded
+    (0.9, -0.5, -0.3),              # 0.3 m above it: at most 0.3 m/s down (reach it in 1 s, not sooner)
+    (0.6, -0.5, 0.0),               # at the bound: no lower
+    (0.3, 0.0, 0.3),                # below it: climb back
+    (0.3, 0.8, 0.8),                # climbing faster anyway
+])
+def test_velocities_never_take_the_height_below_the_bound(guard, height, vz, expected):
+    guard.on_reading(height, 10.0, (0.0, 0.0, height + 0.4))
+    assert guard.safe_vz(vz, (0.0, 0.0, height + 0.4), 10.05) == pytest.approx(expected)
+
+
+def test_velocity_fallback_uses_the_gnss_height_with_the_margin(guard):
+    assert guard.safe_vz(-0.5, (0.0, 0.0, 1.5), 10.0) == pytest.approx(0.0)        # 1.5 = 0.5 + 1.0
+    assert guard.safe_vz(-0.5, (0.0, 0.0, 1.2), 10.0) == pytest.approx(0.3)
