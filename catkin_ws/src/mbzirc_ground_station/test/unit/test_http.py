@@ -85,6 +85,18 @@ def test_foreign_host_and_origin_refused(station):
     assert code == 403 and calls == []
 
 
+def test_links_from_other_pages_open_but_their_posts_are_refused(station):
+    """A link from the SMACH viewer's port (same site) opens the page; a POST from there is refused."""
+    web, calls = station
+    assert request(web, "GET", "/", headers={"Sec-Fetch-Site": "same-site"})[0] == 200
+    assert request(web, "GET", "/", headers={"Sec-Fetch-Site": "cross-site"})[0] == 200
+    body = json.dumps({"command": "land_all"})
+    for site in ("same-site", "cross-site"):
+        assert request(web, "POST", "/api/command", body, {"Content-Type": "application/json",
+                                                             "Sec-Fetch-Site": site})[0] == 403
+    assert calls == []
+
+
 def test_command_needs_json_content_type(station):
     web, calls = station
     body = json.dumps({"command": "land_all"})

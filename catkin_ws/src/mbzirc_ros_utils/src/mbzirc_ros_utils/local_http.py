@@ -5,8 +5,8 @@ any other site open in the same browser can still send requests to them:
 
 * DNS rebinding: a foreign name re-pointed at 127.0.0.1 makes the browser treat our server as that site.
   Rule: every request must name this server in its ``Host`` header (`SameSitePolicy.check`).
-* Cross-site requests (CSRF): a foreign page may POST to us. Rules: a request whose ``Origin`` or
-  ``Sec-Fetch-Site`` shows another site is refused, and a POST body must be ``application/json``, which an
+* Cross-site requests (CSRF): a foreign page may POST to us. Rules: a request whose ``Origin`` shows
+  another site, or a POST whose ``Sec-Fetch-Site`` is not same-origin, is refused, and a POST body must be ``application/json``, which an
   HTML form cannot send and a script of another origin cannot send without a CORS preflight that these
   servers never grant (`parse_json_body`).
 
@@ -137,12 +137,13 @@ class JsonRequestHandler(BaseHTTPRequestHandler):
     def send_json(self, code: int, obj: object) -> None:
         self.send_body(code, json.dumps(obj).encode("utf-8"), "application/json")
 
-    def refused(self, with_origin: bool = True) -> bool:
-        """True (after answering 403) when the request is not from this server's own pages. with_origin=False:
-        the Host alone decides (a GET that changes nothing)."""
+    def refused(self) -> bool:
+        """True (after answering 403) when the request is not from this server's own pages. Sec-Fetch-Site
+        is judged on POSTs only: a GET may be a link followed from another page (the SMACH viewer's port is
+        'same-site'), and it changes nothing."""
         h = self.headers
-        why = self.policy.check(h.get("Host"), h.get("Origin") if with_origin else None,
-                                h.get("Sec-Fetch-Site") if with_origin else None)
+        why = self.policy.check(h.get("Host"), h.get("Origin"),
+                                h.get("Sec-Fetch-Site") if self.command == "POST" else None)
         if why:
             self.close_connection = True
             self.send_json(403, {"error": why})

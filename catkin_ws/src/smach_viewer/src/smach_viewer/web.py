@@ -124,7 +124,7 @@ class ViewerHttpServer:
             max_body = MAX_BODY
 
             def do_GET(self) -> None:  # noqa: N802
-                if self.refused(with_origin=False):   # a GET changes nothing: the Host decides
+                if self.refused():
                     return
                 url = urlparse(self.path)
                 if url.path in ("/", "/index.html"):
