@@ -11,6 +11,7 @@ the count would be larger without the package's setting, on a machine with more 
 """
 import os
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -19,7 +20,9 @@ import pytest
 SRC = pathlib.Path(__file__).resolve().parents[1] / "catkin_ws" / "src"
 NODE_SCRIPTS = ["hector_mapping/scripts/hector_mapping", "ual_sim/scripts/ual_sim_node",
                 "fire_detector/scripts/fire_detector", "circle_detector/scripts/circle_detector",
-                "indoor_localization/scripts/indoor_pose"]
+                "indoor_localization/scripts/indoor_pose", "object_estimation/scripts/object_estimator",
+                "mbzirc_agents/scripts/uav_agent", "mbzirc_agents/scripts/ugv_agent",
+                "mbzirc_central_unit/scripts/central_unit_node.py", "shared_regions_manager/scripts/region_manager"]
 COUNT_THREADS = ("import numpy, os\n"
                  "a = numpy.ones((512, 512))\n"
                  "for _ in range(5): a @ a\n"
@@ -36,7 +39,7 @@ def threads_after(imports: str) -> int:
 def script_imports(script: str) -> str:
     """The script's code before `if __name__ == "__main__":` (its imports)."""
     text = (SRC / script).read_text()
-    return text.split('if __name__ == "__main__":')[0]
+    return re.split(r"""if __name__ == ['"]__main__['"]:""", text)[0]
 
 
 @pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one core: OpenBLAS starts no worker anyway")

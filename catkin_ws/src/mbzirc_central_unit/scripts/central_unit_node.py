@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """central_unit node: the Challenge 3 strategy, action client of every agent (see the package README)."""
-import rospy
-
+# the package first: it makes numpy single-threaded before rospy loads numpy
 from mbzirc_central_unit.central_unit import CentralUnit
+import rospy  # noqa: E402
 
 
 def main() -> None:

@@ -1,11 +1,17 @@
 """Shared main of the uav_agent and ugv_agent nodes: read ~params, build the agent, introspection, spin."""
 from __future__ import annotations
 
-from typing import Any, Dict
+import os
 
-import rospy
+# One OpenBLAS thread unless the user set another number (fire_detector README, "single-threaded numerics"):
+# set here, the first module the agent scripts import, before NumPy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from .operator_services import OperatorServices
+from typing import Any, Dict  # noqa: E402
+
+import rospy  # noqa: E402
+
+from .operator_services import OperatorServices  # noqa: E402
 from .params import OTHER_NODE_PARAMS, AgentParams, check_values
 from .ros_backend import RosBackend
 
