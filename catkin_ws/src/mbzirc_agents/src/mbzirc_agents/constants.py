@@ -76,6 +76,9 @@ HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task n
 SM_MAX_RESTARTS = 3
 # a first pose above this (m) is in the air: a respawned agent, whose home and regions are not here
 ON_GROUND_MAX_Z = 0.5
+# m: a landed robot reported this close to its home pad stands on it (a few sigma of the GNSS error; pads are
+# 3.3 m apart): its boxes go on the pad, and landing farther than this is landing away from home
+HOME_PAD_RADIUS = 1.5
 # wall seconds without a sign of life from the state machine (idle loop, task checks, feedback) before the
 # agent withholds its data_feed: its work is then the central unit's to give to others
 SM_STALL_S = 30.0

@@ -108,13 +108,17 @@ class RobotAgent(Agent):
     def _settle_start(self, xyz: np.ndarray) -> None:
         """At the first pose: choose home and what to do with the regions of a previous run.
 
-        Home is `~home` when given, else this first pose when the robot is on the ground (the normal start),
-        else the arena's home of this robot (known before the trial, mbzirc_arena): a first pose in the air
-        is a respawned agent, never home."""
+        Home is `~home` when given, else the arena's home pad of this robot (known before the trial,
+        mbzirc_arena) when the robot starts on it (within C.HOME_PAD_RADIUS: the reported pose carries the
+        GNSS error, the pad's place does not), else this first pose when the robot is on the ground
+        elsewhere; a first pose in the air is a respawned agent, never home: then the arena's home."""
         airborne = xyz[2] > C.ON_GROUND_MAX_Z
         if self.home is None:
             known = next((h.position for h in ARENA.homes if str(h.robot_id) == str(self.agent_id)), None)
-            if not airborne:
+            on_pad = known is not None and math.hypot(xyz[0] - known[0], xyz[1] - known[1]) <= C.HOME_PAD_RADIUS
+            if not airborne and on_pad:
+                self.home = np.array(known, dtype=float)
+            elif not airborne:
                 self.home = xyz.copy()
             elif known is not None:
                 self.home = np.array(known, dtype=float)
@@ -537,6 +541,18 @@ class RobotAgent(Agent):
             self.stop_pump()
         self.hold()
 
+    def ground_anchor(self, p: Sequence[float]) -> tuple:
+        """(x, y) of the boxes a landed UAV reserves (parked box, take-off column): its home pad when it
+        stands within C.HOME_PAD_RADIUS of it, else where it reports to be.
+
+        Why: the reported pose of a landed UAV wanders with the GNSS bias (a metre, slowly) while the UAV
+        stands still; boxes placed on it drift into the next pad's column, 3.3 m away. Seen under realistic
+        uncertainty: a refilled UAV waited minutes for its take-off column, refused because of the parked
+        box of its landed neighbour. The pads' places are known before the trial and do not wander."""
+        if self.home is not None and math.hypot(p[0] - self.home[0], p[1] - self.home[1]) <= C.HOME_PAD_RADIUS:
+            return float(self.home[0]), float(self.home[1])
+        return float(p[0]), float(p[1])
+
     def idle(self) -> None:
         """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one."""
         if self.ROBOT_TYPE != 'uav' or not self.p.use_regions or self.parked:
@@ -548,6 +564,7 @@ class RobotAgent(Agent):
             return
         self._last_park_try = now
         p, h = self.position(wait=0.0), self.p.parked_half_size
+        p = (*self.ground_anchor(p), p[2])
         req = AskForRegionRequest(agent_id=self.agent_id, label='parked')
         req.min_corner = PointStamped()
         req.max_corner = PointStamped()

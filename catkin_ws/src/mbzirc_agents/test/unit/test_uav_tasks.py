@@ -364,3 +364,17 @@ def test_go_to_a_point_inside_the_building_from_outside_is_refused(uav):
     s.send(GoToGoal(waypoint=pose(26.5, 18.8, 1.0)))
     assert s.wait(10) == 'aborted' and 'inside the building outline' in s.result.message
     assert ual.pos[0] < 11.0
+
+
+def test_landed_uav_boxes_stay_on_its_pad_while_the_gnss_bias_wanders(uav):
+    """Realistic seed 102: a refilled UAV waited minutes for its take-off column, refused by the parked box
+    of its landed neighbour; both boxes had followed their robots' wandering GNSS bias off the pads."""
+    agent, ual, be = uav
+    ual.gnss_bias = np.array([0.3, 1.3, 0.0])               # the reported pose of the landed UAV wanders
+    be.clock.sleep(2.5)                                      # idle() asks for the parked box every 2 s
+    lo, hi = ual.regions.regions()[('2', 'parked')]
+    assert np.allclose((lo[:2] + hi[:2]) / 2, agent.home[:2])  # on the pad (robot 2's home), not the fix
+    # a neighbour's box that the column over the reported position would overlap, not the pad's
+    ok, _ = ual.regions.ask('3', 'parked', (-1.0, 1.2, 0.0), (1.0, 4.0, 2.0))
+    assert ok
+    assert take_off(be) == 'succeeded'

@@ -45,6 +45,7 @@ class RegionManagerNode:
         self.mission = str(rospy.get_param('/run_id', '') or '') if self.state_file else ''
         self._save_lock = threading.Lock()
         self._saved_body = ''
+        self._waiting: dict = {}          # (agent, label) -> why its last request was refused
         if self.state_file:
             self._resume()
         self.ask_srv = rospy.Service('ask_for_region', AskForRegion, self.on_ask)
@@ -109,9 +110,23 @@ class RegionManagerNode:
             rospy.logwarn_throttle(30.0, f'ask_for_region: {req.agent_id!r} ({caller_of(req)}) is not a robot of '
                                          f'this mission: {why}')
         rospy.logdebug(f'ask_for_region {req.agent_id}/{req.label}: {why}')
+        self._log_wait(req.agent_id, req.label, ok, why)
         if ok:
             self.changed()
         return AskForRegionResponse(success=ok)
+
+    def _log_wait(self, agent_id: str, label: str, granted: bool, why: str) -> None:
+        """Log who waits for whom, once per change: an agent retries a refused box twice a second, and the
+        log must say which region of which agent blocks it (the srv's answer carries only success)."""
+        key = (agent_id, label)
+        if granted:
+            if self._waiting.pop(key, None) is not None:
+                rospy.loginfo(f'region manager: {agent_id}/{label} granted after waiting')
+        elif self._waiting.get(key) != why:
+            self._waiting[key] = why
+            if len(self._waiting) > 1000:                  # bounded: a caller inventing labels
+                self._waiting.clear()
+            rospy.loginfo(f'region manager: {agent_id}/{label} refused: {why}')
 
     def on_free(self, req: FreeRegions._request_class) -> FreeRegionsResponse:
         """Free one box of the agent, or all of them, when the caller may."""

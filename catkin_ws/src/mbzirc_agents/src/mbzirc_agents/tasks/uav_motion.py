@@ -79,7 +79,8 @@ class TakeOff(AgentTask):
         target_z = p[2] + ud.height
         half = a.p.hold_half_size
         self.feedback('WAITING_REGION', 'reserving the take-off column')
-        a.reserve(self, 'take_off', column_box(p[0], p[1], p[2], target_z + half, half))
+        x, y = a.ground_anchor(p)
+        a.reserve(self, 'take_off', column_box(x, y, p[2], target_z + half, half))
         self.feedback('TAKING_OFF', f'taking off to z {target_z:.1f}')
         try:
             srv = a.iface.add_client('ual/take_off', TakeOffSrv)
@@ -215,7 +216,7 @@ class GoHomeAndRefill(AgentTask):
             self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
             self.call_task_or_raise('go_to', {'waypoint': ((home[0], home[1], z), None)}, 'going home')
             self.call_task_or_raise('land', {}, 'landing')
-        elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > 1.5:
+        elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > C.HOME_PAD_RADIUS:
             raise TaskError('landed away from home: take off first')
         self.feedback('REFILLING', 'waiting for the reset (water / blanket)')
         if a.p.payload == 'water':
