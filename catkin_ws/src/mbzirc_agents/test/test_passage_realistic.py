@@ -16,6 +16,7 @@ import rostest
 from actionlib_msgs.msg import GoalStatus
 from agent_test_utils import SimRobots, pose, run, wait_wall
 from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs.msg import AgentDataFeed
 from mbzirc_comm_objs.srv import CheckFire, CheckFireResponse
 from ual_sim.msg import Score
 
@@ -57,6 +58,12 @@ class TestPassageRealistic(unittest.TestCase):
             rospy.Service(f'/mbzirc2020_{i}/thermal_detection/fire_detected', CheckFire,
                           lambda r: CheckFireResponse(fire_detected=False))
         assert wait_wall(lambda: UAV in cls.sim.poses and UGV in cls.sim.poses, 60), 'no /sim/robots'
+        # the agents' first UAL state (a goal before it: "UAL state is UNINITIALIZED (crashed?)")
+        feeds = {}
+        for i in (UAV, UGV):
+            rospy.Subscriber(f'/mbzirc2020_{i}/data_feed', AgentDataFeed,
+                             lambda m, i=i: feeds.__setitem__(i, m.ual_state))
+        assert wait_wall(lambda: all(feeds.get(i, 0) != 0 for i in (UAV, UGV)), 60), f'agents not ready: {feeds}'
 
         def sample(_e):
             for i in (UAV, UGV):

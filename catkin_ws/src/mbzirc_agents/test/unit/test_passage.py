@@ -57,6 +57,7 @@ def uav():
     be = FakeBackend()
     agent, ual = start_uav(be, speedup=1.0)
     ual.follow_velocity = True
+    ual.altimeter = False                                   # the scene's, over its shifted ground
     s = be.servers['take_off_action']
     s.send(TakeOffGoal(height=3.0))
     assert s.wait(20) == 'succeeded'
@@ -74,17 +75,19 @@ def enter(be, timeout=120):
     return s, s.wait(timeout)
 
 
-def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav):
-    """A metre aside, and the window 0.7 m lower than its GNSS height says (z 5.8-7.8 in its frame): the
-    altimeter brings it down to the window's middle height."""
+@pytest.mark.parametrize('z_shift', [-0.7, 1.2])
+def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav, z_shift):
+    """A metre aside, and the window 0.7 m lower than its GNSS height says (z 5.8-7.8 in its frame), or
+    1.2 m higher (8.7-10.7: the laser's plane under the sill at first, no window seen): the altimeter
+    brings it to the window's middle height."""
     agent, ual, be, scene = uav
-    scene.z_shift = -0.7
+    scene.z_shift = z_shift
     track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
     s, status = enter(be)
     assert status == 'succeeded', s.result.message
     true_x = WINDOW_X - 1.0
     assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
-    zs = [z + 0.7 for z in track.zs]                          # in the world's frame
+    zs = [z - z_shift for z in track.zs]                      # in the world's frame
     assert 6.5 + UAV_R < min(zs) and max(zs) < 8.5 - UAV_R, (min(zs), max(zs))
     assert ual.pos[1] < WALL_Y[0] - UAV_R, f'not inside: {ual.pos}'
     assert any('centred on the window' in m for m in be.infos), be.infos
@@ -195,3 +198,4 @@ def test_true_height_from_the_altimeter():
     assert abs(true_height(3.3, (23.8, 14.5, 7.5)) - 7.8) < 1e-9      # GNSS over the tower's edge
     assert abs(true_height(2.4, (15.5, 18.0, 7.5)) - 7.4) < 1e-9      # inside, over the first floor
     assert true_height(1.0, (15.5, 21.0, 7.5)) is None                 # something 6 m under the UAV?
+    assert true_height(2.3, (25.2, 14.5, 9.5)) is None                 # 2.7 m from the roof, 7.2 from the ground

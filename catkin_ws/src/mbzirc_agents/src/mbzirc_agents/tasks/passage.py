@@ -45,7 +45,7 @@ def nearest_opening(kind: str, point) -> Any:
     return min(found, key=lambda o: math.dist(o.centre, point[:3]))
 
 
-def true_height(reading: float, gnss: Sequence[float], margin: float = 1.0, max_error: float = 1.2
+def true_height(reading: float, gnss: Sequence[float], margin: float = 1.0, max_error: float = 2.0
                 ) -> Optional[float]:
     """Arena z of base_link from an altimeter reading (m above the surface below) and the GNSS position:
     the surface is the one of the arena model near (x, y) (the ground, or the top or a storey's floor of a
@@ -275,15 +275,16 @@ class LaserPassage:
             seen = None if msg is None else self._see(msg, width, expected)
             if seen is not None and abs(seen.lateral - expected) > SEARCH_RADIUS and self._last is None:
                 seen = None                          # another opening than the arena model's
+            # the height first: at a GNSS height a metre off, the laser's plane may miss the window
+            vz, z_ok = self._vertical(height) if msg is not None else (0.0, False)
             if seen is None:
-                self._hold(heading)
+                self._command(np.zeros(2), heading, msg, vz)
                 task.feedback('FINDING', f'looking for the {kind} with the laser')
                 a.backend.sleep(dt)
                 continue
             self._check_jump(seen, kind, ctl.lateral_vmax)
             expected = seen.lateral
             yaw_ok = abs(math.remainder(a.position()[3] - heading, 2 * math.pi)) <= a.p.yaw_tolerance
-            vz, z_ok = self._vertical(height)
             centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok and z_ok else 0
             if centred >= CENTRED_SCANS:
                 a.backend.loginfo(f'[{task.name}] centred on the {kind} ({seen.width:.2f} m wide, '
