@@ -186,16 +186,3 @@ def test_the_ugv_passes_an_interior_doorway_the_laser_sees_on_its_leg(ugv):
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.5 + UGV_R, 12.5 - UGV_R), (min(track.xs), max(track.xs))
     assert ual.pos[0] > 17.9 + UGV_R, f'not through: {ual.pos}'
-
-
-def test_true_height_from_the_altimeter():
-    """The surface under the reading is the arena model's one that best explains it: the ground in front of
-    facade A, the extension's roof (4.5 m) in front of facade D, even when the GNSS puts the UAV 0.5 m
-    beside that roof, the first floor inside; a reading no surface explains is not used."""
-    from mbzirc_agents.tasks.passage import true_height
-    assert abs(true_height(7.2, (15.5, 21.0, 7.5)) - 7.2) < 1e-9
-    assert abs(true_height(3.3, (25.2, 14.5, 7.5)) - 7.8) < 1e-9
-    assert abs(true_height(3.3, (23.8, 14.5, 7.5)) - 7.8) < 1e-9      # GNSS over the tower's edge
-    assert abs(true_height(2.4, (15.5, 18.0, 7.5)) - 7.4) < 1e-9      # inside, over the first floor
-    assert true_height(1.0, (15.5, 21.0, 7.5)) is None                 # something 6 m under the UAV?
-    assert true_height(2.3, (25.2, 14.5, 9.5)) is None                 # 2.7 m from the roof, 7.2 from the ground

@@ -14,13 +14,13 @@ nearer than `~opening_keep_off` (control.keep_off_return).
 from __future__ import annotations
 
 import math
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, Optional, Tuple
 
 import numpy as np
-from sensor_msgs.msg import LaserScan, Range
+from sensor_msgs.msg import LaserScan
 from mbzirc_arena.boxes import swept_box
 from mbzirc_arena.buildings import in_footprint, standing_at
-from mbzirc_arena.c3 import ARENA, FLOOR_HEIGHTS
+from mbzirc_arena.c3 import ARENA
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
@@ -45,23 +45,6 @@ def nearest_opening(kind: str, point) -> Any:
     return min(found, key=lambda o: math.dist(o.centre, point[:3]))
 
 
-def true_height(reading: float, gnss: Sequence[float], margin: float = 1.0, max_error: float = 2.0
-                ) -> Optional[float]:
-    """Arena z of base_link from an altimeter reading (m above the surface below) and the GNSS position:
-    the surface is the one of the arena model near (x, y) (the ground, or the top or a storey's floor of a
-    building whose outline grown by margin holds it: the GNSS error) that best explains the reading (the
-    candidates are metres apart, the GNSS height is off by decimetres); None when none is within max_error.
-
-    Why: the GNSS height is off by decimetres and a window is 2 m tall. In front of a window the surface is
-    the ground or the extension's roof, behind it the storey's floor."""
-    x, y, z = gnss[0], gnss[1], gnss[2]
-    near = [b for b in C.BUILDINGS if b[0] - margin <= x <= b[2] + margin and b[1] - margin <= y <= b[3] + margin]
-    surfaces = [C.ARENA_BOX[2]] + [b[4] for b in near if b[4] < z] + [
-        f for b in near for f in FLOOR_HEIGHTS if f < min(z, b[4])]
-    best = min(surfaces, key=lambda s: abs(reading + s - z))
-    return reading + best if abs(reading + best - z) <= max_error else None
-
-
 def crosses_outline(a, b) -> bool:
     """True when the straight leg a -> b goes from outside a building's outline to inside or back."""
     return in_footprint(a, standing_at(a, C.BUILDINGS)) != in_footprint(b, standing_at(b, C.BUILDINGS))
@@ -79,10 +62,7 @@ class LaserPassage:
         self.agent = task.agent
         self._scan: Optional[Tuple[Any, float]] = None     # (LaserScan, receive time)
         self._blind_since: Optional[float] = None
-        self._altitude: Optional[Tuple[float, float]] = None   # (altimeter m, receive time)
         task.iface.add_subscriber(task.name, 'scan', LaserScan, self._on_scan)
-        if self.agent.ROBOT_TYPE == 'uav':
-            task.iface.add_subscriber(task.name, 'altimeter', Range, self._on_altimeter)
 
     # ---- the laser --------------------------------------------------------------------------------
     def _on_scan(self, msg: LaserScan) -> None:
@@ -100,16 +80,17 @@ class LaserPassage:
         self._blind_since = None
         self._scan = (msg, now)
 
-    def _on_altimeter(self, msg: Range) -> None:
-        """Keep the latest valid reading (NaN dropouts and out-of-range readings are skipped)."""
-        if math.isfinite(msg.range) and msg.range > 0:
-            self._altitude = (float(msg.range), self.agent.backend.now())
-
     def height_now(self) -> Optional[float]:
-        """The UAV's true height (arena z of base_link) from a fresh altimeter reading (true_height), else None."""
-        if self._altitude is None or self.agent.backend.now() - self._altitude[1] > C.SCAN_MAX_AGE:
+        """The UAV's true height (arena z of base_link): its GNSS height corrected by the vertical GNSS error
+        its clearance guard estimates from the altimeter (clearance.py); None without a fresh estimate (or
+        a guard: the UGV). Why: the GNSS height is off by decimetres and a window is 2 m tall."""
+        keeper = getattr(self.agent, 'clearance', None)
+        if keeper is None:
             return None
-        return true_height(self._altitude[0], self.agent.position()[:3])
+        with keeper.lock:
+            g = keeper.guard
+            e = g.error if g.fresh(self.agent.backend.now()) else None
+        return None if e is None else float(self.agent.position()[2] - e)
 
     def _fresh_scan(self) -> Optional[Any]:
         """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
