@@ -12,13 +12,15 @@ z >= surface + clearance + e.
 Rules:
 - a reading's surface is the one of the arena plan below the UAV (ground, a roof, a storey's floor) that
   best explains it (closest to the last estimate of e): the candidates are metres apart, e decimetres;
-  a reading that fits none (|e| > max_gnss_error) or moves a fresh estimate by more than max_step is
-  something the plan does not know (a window sill, a robot below): not believed, and after max_age of
-  such readings the fallback applies until the readings make sense again;
+  a reading that fits none (|e| > max_gnss_error), or that moves a fresh estimate by more than max_step
+  while the reading jumped more than the GNSS height, is something the plan does not know (a window sill,
+  a robot below): not believed, and after max_age of such readings the fallback applies until the
+  readings make sense again; when the GNSS height jumped instead (a re-fix), the new error holds at once;
 - set-points: z >= surface at the target + min_clearance + `hysteresis` + e; the caller re-sends a
   held set-point when that bound has risen by half the hysteresis (e wanders while the UAV holds);
-- velocities: the vertical command never lets the measured height fall below min_clearance + hysteresis
-  within `horizon` s (it climbs back when below);
+- velocities: the vertical command never lets the height (the GNSS height now, corrected by e, above the
+  last reading's surface) fall below min_clearance + hysteresis within `horizon` s (it climbs back when
+  below);
 - no fresh valid altimeter reading (stale, NaN, no return): e is unknown; the bounds use the GNSS height
   with `fallback_margin` more clearance (and the caller warns, throttled).
 Pure: no ROS, no clock of its own (times are passed in), tested in test_clearance.py.
@@ -35,7 +37,7 @@ class ClearanceConfig:
     """Numbers of the guard (the first three are agent params, README "Params")."""
     min_clearance: float = 0.5      # m of true height above the surface below, at least
     fallback_margin: float = 1.0    # m more when the altimeter gives nothing usable (GNSS height only)
-    max_age: float = 0.5            # s: an older altimeter reading is stale
+    max_age: float = 1.5            # s: an older altimeter reading is stale (e moves ~0.1 m in that time)
     hysteresis: float = 0.1         # m: set-points aim this much above the clearance (see the rules)
     horizontal_margin: float = 1.0  # m: a roof this close (xy) may be under the UAV (GNSS horizontal error)
     max_gnss_error: float = 3.0     # m: a reading implying a larger vertical error is not believed
@@ -45,16 +47,16 @@ class ClearanceConfig:
 
 
 def surfaces_at(x: float, y: float, footprints: Sequence[Sequence[float]], floor_heights: Sequence[float],
-                ground_z: float, roof_margin: float) -> list:
+                ground_z: float, roof_margin: float, floor_margin: float = 0.0) -> list:
     """Heights of the surfaces the arena plan may put under (x, y): the ground, the roof of every building
     whose footprint grown by roof_margin holds (x, y), and the storeys' floors (those below its roof) of
-    every building whose footprint holds it (floors lie inside the walls: no margin)."""
+    every building whose footprint grown by floor_margin holds it."""
     out = [float(ground_z)]
     for b in footprints:
         x0, y0, x1, y1, top = (float(v) for v in b[:5])
         if x0 - roof_margin <= x <= x1 + roof_margin and y0 - roof_margin <= y <= y1 + roof_margin:
             out.append(top)
-        if x0 <= x <= x1 and y0 <= y <= y1:
+        if x0 - floor_margin <= x <= x1 + floor_margin and y0 - floor_margin <= y <= y1 + floor_margin:
             out.extend(float(f) for f in floor_heights if ground_z < f < top)
     return sorted(set(out))
 
@@ -71,13 +73,18 @@ class ClearanceGuard:
         self.floor_heights = tuple(floor_heights)
         self.ground_z = float(ground_z)
         self.error: Optional[float] = None      # e, m (GNSS z - true z), smoothed
-        self.height: Optional[float] = None     # last valid measured height above the surface, m
+        self.surface: Optional[float] = None    # the plan's surface under the last valid reading, m
+        self._last = (math.nan, math.nan)       # (height read, GNSS z) of the last valid reading
         self.valid_time = -math.inf             # stamp of the last valid reading
         self.last_problem = 'no altimeter reading yet'
 
     # ---- input -------------------------------------------------------------------------------------------
-    def surfaces(self, x: float, y: float) -> list:
-        return surfaces_at(x, y, self.footprints, self.floor_heights, self.ground_z, self.cfg.horizontal_margin)
+    def surfaces(self, x: float, y: float, floors_near: bool = False) -> list:
+        """The plan's surfaces that may be under (x, y) (roofs within the horizontal margin; storey floors
+        inside the footprint, or within the margin too with floors_near: what a reading may have seen in a
+        window, whose GNSS position may be outside)."""
+        m = self.cfg.horizontal_margin
+        return surfaces_at(x, y, self.footprints, self.floor_heights, self.ground_z, m, m if floors_near else 0.0)
 
     def on_reading(self, reading: float, stamp: float, gnss_xyz: Sequence[float]) -> None:
         """One altimeter reading (REP 117: -inf too close, +inf no return, NaN invalid) taken at `stamp`
@@ -95,24 +102,27 @@ class ClearanceGuard:
         h = max(0.0, r)                          # -inf: closer than the minimum range
         x, y, z = (float(v) for v in gnss_xyz[:3])
         prior = self.error if self.error is not None else 0.0
-        candidates = [z - h - s for s in self.surfaces(x, y)]
-        e = min(candidates, key=lambda c: abs(c - prior))
+        e, surface = min(((z - h - s, s) for s in self.surfaces(x, y, floors_near=True)),
+                         key=lambda c: abs(c[0] - prior))
         if abs(e) > self.cfg.max_gnss_error:
             self.last_problem = (f'reading {h:.2f} m fits no surface of the plan (would mean a GNSS height '
                                  f'error of {e:+.1f} m): something below the UAV?')
             return
         fresh = self.error is not None and stamp - self.valid_time <= self.cfg.max_age
         if fresh and abs(e - self.error) > self.cfg.max_step:
-            self.last_problem = (f'reading {h:.2f} m jumps the GNSS height error estimate by '
-                                 f'{e - self.error:+.1f} m: something below the UAV (a sill, a robot)?')
-            return
+            dh, dz = h - self._last[0], z - self._last[1]
+            if abs(dh) > abs(dz):       # the reading jumped, not the fix: something the plan does not know
+                self.last_problem = (f'reading {h:.2f} m jumps the GNSS height error estimate by '
+                                     f'{e - self.error:+.1f} m: something below the UAV (a sill, a robot)?')
+                return
+            fresh = False               # the fix jumped (a re-fix), the reading did not: the new error at once
         if not fresh:
             self.error = e                        # first reading, or fresh after a gap: no smoothing
         else:
             dt = max(0.0, stamp - self.valid_time)
             a = 1.0 - math.exp(-dt / self.cfg.filter_tau) if self.cfg.filter_tau > 0 else 1.0
             self.error += a * (e - self.error)
-        self.height, self.valid_time = h, stamp
+        self.surface, self.valid_time, self._last = surface, stamp, (h, z)
 
     # ---- state ---------------------------------------------------------------------------------------------
     def fresh(self, now: float) -> bool:
@@ -151,12 +161,13 @@ class ClearanceGuard:
         return max(float(z), self.min_set_point_z(x, y, z, now))
 
     def height_now(self, gnss_xyz: Sequence[float], now: float) -> Tuple[float, float]:
-        """(height above the surface below, clearance to keep): measured when fresh, else the GNSS height
-        above the plan's surface with the fallback clearance."""
+        """(height above the surface below, clearance to keep): with a fresh estimate the GNSS height now,
+        corrected by e, above the surface of the last reading (the reading itself may be a few tenths of a
+        second old); else the GNSS height above the plan's surface, with the fallback clearance."""
         e, clearance = self._error_and_clearance(now)
-        if self.fresh(now) and self.height is not None:
-            return self.height, clearance
         x, y, z = (float(v) for v in gnss_xyz[:3])
+        if self.fresh(now) and self.surface is not None:
+            return z - e - self.surface, clearance
         return z - self.surface_below(x, y, z, clearance), clearance
 
     def safe_vz(self, vz: float, gnss_xyz: Sequence[float], now: float) -> float:

@@ -101,7 +101,7 @@ class AgentParams:
                                   'landing) closer to the surface below, by its altimeter (`altimeter`)')
     clearance_fallback_margin: float = _param(1.0, 'm more clearance, on the GNSS height above the arena plan, '
                                               'while the altimeter gives no valid reading')
-    altimeter_max_age: float = _param(0.5, 's: an older altimeter reading is stale (the fallback applies)')
+    altimeter_max_age: float = _param(1.5, 's (sim): an older altimeter reading is stale (the fallback applies)')
     clearance_guard: bool = _param(True, 'false: motion commands pass unbounded (as without an altimeter; '
                                          'for comparisons)')
     pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')

@@ -28,10 +28,14 @@ def test_surfaces_of_the_plan():
 def test_the_altimeter_gives_the_vertical_gnss_error(guard):
     guard.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))        # the fix reads 0.5 m high
     assert guard.error == pytest.approx(0.5)
-    assert guard.fresh(10.2) and not guard.fresh(10.6)
+    assert guard.fresh(11.4) and not guard.fresh(11.6)
     g2 = ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
     g2.on_reading(1.5, 10.0, (*EXT_ROOF, 5.7))            # over the roof: 1.5 m above 4.5 m, fix 0.3 low
     assert g2.error == pytest.approx(-0.3)
+    g3 = ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
+    g3.on_reading(2.5, 10.0, (20.0, 19.9, 12.6))           # in a floor-2 window, the fix 0.4 m outside
+    assert g3.error == pytest.approx(0.1)                  # the storey's floor explains it (not the ground)
+    assert g3.surfaces(20.0, 19.9) == [0.0, 18.0]          # but no floor is under a UAV outside for the bounds
 
 
 def test_the_estimate_is_smoothed_and_restarts_after_a_gap(guard):
@@ -47,9 +51,9 @@ def test_set_points_keep_the_clearance_above_the_true_surface(guard):
     z = guard.safe_set_point_z(*A4_STANDOFF, 0.75, 10.1)
     assert z - guard.error == pytest.approx(0.5 + 0.1)     # true height: the clearance and the hysteresis
     assert guard.safe_set_point_z(*A4_STANDOFF, 3.0, 10.1) == 3.0     # high enough: unchanged
-    guard.on_reading(1.5, 11.0, (*EXT_ROOF, 6.0))          # over the roof, e = 0
-    assert guard.safe_set_point_z(*EXT_ROOF, 4.7, 11.05) == pytest.approx(4.5 + 0.6)
-    assert guard.safe_set_point_z(*EXT_ROOF, 6.0, 11.05) == 6.0
+    guard.on_reading(1.5, 13.0, (*EXT_ROOF, 6.0))          # over the roof, e = 0
+    assert guard.safe_set_point_z(*EXT_ROOF, 4.7, 13.05) == pytest.approx(4.5 + 0.6)
+    assert guard.safe_set_point_z(*EXT_ROOF, 6.0, 13.05) == 6.0
 
 
 def test_without_a_fresh_reading_the_bound_takes_the_fallback_margin(guard):
@@ -57,20 +61,28 @@ def test_without_a_fresh_reading_the_bound_takes_the_fallback_margin(guard):
     assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 5.0) == pytest.approx(0.5 + 1.0)
     guard.on_reading(0.75, 10.0, (*A4_STANDOFF, 0.75))
     guard.on_reading(math.nan, 10.5, (*A4_STANDOFF, 0.75))
-    assert guard.problem(11.0).startswith('no valid altimeter reading for 1.0 s')
-    assert 'NaN' in guard.problem(11.0)
-    assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 11.0) == pytest.approx(1.5)
+    assert guard.problem(11.4) == ''                       # one NaN: still fresh
+    assert guard.problem(12.0).startswith('no valid altimeter reading for 2.0 s')
+    assert 'NaN' in guard.problem(12.0)
+    assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 12.0) == pytest.approx(1.5)
 
 
 def test_a_reading_no_surface_explains_is_not_believed(guard):
     guard.on_reading(0.2, 10.0, (0.0, 0.0, 6.0))          # 5.8 m of error? an object under the UAV
-    assert guard.error is None and 'fits no surface' in guard.problem(10.6)
-    guard.on_reading(6.1, 11.0, (0.0, 0.0, 6.0))          # e = -0.1
-    guard.on_reading(5.0, 11.05, (0.0, 0.0, 6.0))         # a window sill 1.1 m up passes under the UAV
-    assert guard.error == pytest.approx(-0.1) and guard.fresh(11.1)
+    assert guard.error is None and 'fits no surface' in guard.problem(11.6)
+    guard.on_reading(6.1, 20.0, (0.0, 0.0, 6.0))          # e = -0.1
+    guard.on_reading(5.0, 20.05, (0.0, 0.0, 6.0))         # a window sill 1.1 m up passes under the UAV
+    assert guard.error == pytest.approx(-0.1) and guard.fresh(20.1)
     assert 'jumps' in guard.last_problem
-    guard.on_reading(5.0, 11.6, (0.0, 0.0, 6.0))          # persists past max_age: believed (stale before)
+    guard.on_reading(5.0, 21.6, (0.0, 0.0, 6.0))          # persists past max_age: believed (stale before)
     assert guard.error == pytest.approx(1.0)
+
+
+def test_a_jump_of_the_fix_is_believed_at_once(guard):
+    """A GNSS re-fix moves the reported height by a metre; the altimeter did not move: the new error."""
+    guard.on_reading(2.0, 10.0, (0.0, 0.0, 2.1))
+    guard.on_reading(2.0, 10.05, (0.0, 0.0, 3.1))
+    assert guard.error == pytest.approx(1.1) and guard.fresh(10.1)
 
 
 @pytest.mark.parametrize('height, vz, expected', [

@@ -103,13 +103,13 @@ def test_a_dead_altimeter_is_reported_and_the_gnss_margin_applies():
     be, agent, ual = fly()
     try:
         ual.altimeter_reading = math.nan                        # invalid readings only
-        be.clock.sleep(1.0)
+        be.clock.sleep(2.0)
         s, status = go_to(be, 2.0, 0.0, 0.75)
         assert status == 'succeeded', s.text
         assert ual.pos[2] == pytest.approx(0.5 + 1.0, abs=0.05)  # GNSS height, clearance + fallback margin
         assert any('altimeter' in e and 'NaN' in e for e in be.errors), be.errors
         ual.altimeter = False                                   # silent: stale
-        be.clock.sleep(1.0)
+        be.clock.sleep(2.0)
         assert any('altimeter' in e and 'no valid altimeter reading for' in e for e in be.errors[-3:])
     finally:
         stop(be, agent, ual)
