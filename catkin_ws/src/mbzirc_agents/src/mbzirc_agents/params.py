@@ -76,7 +76,8 @@ class AgentParams:
     ground_search_spacing: float = _param(3.0, 'm between the lawn-mower legs')
     ground_check_time: float = _param(1.5, 's of dwell at each ground-search waypoint (frame filter > 1 s)')
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
-    entry_depth: float = _param(2.5, 'm flown in through a window, from the entry pose')
+    entry_depth: float = _param(3.5, 'm flown in through a window, from the entry pose (the central unit\'s '
+                                'is 2 m outside it)')
     laser_openings: bool = _param(True, 'windows and doors are passed guided by the laser (`scan`): centred '
                                   'on the opening it sees, then through; false: a straight leg in the arena frame')
     opening_width: float = _param(0.0, 'm, width of the window / door the laser looks for; 0: the arena '

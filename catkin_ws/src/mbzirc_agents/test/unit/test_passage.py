@@ -186,3 +186,24 @@ def test_the_ugv_passes_an_interior_doorway_the_laser_sees_on_its_leg(ugv):
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.5 + UGV_R, 12.5 - UGV_R), (min(track.xs), max(track.xs))
     assert ual.pos[0] > 17.9 + UGV_R, f'not through: {ual.pos}'
+
+
+def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):
+    """Seen in a realistic mission (seed 101): after entering floor 1 through facade D's window, the leg from
+    (22.7, 14.5) to the viewpoint (15.7, 8.5) met the interior wall (x 17.7-17.9) 0.3 m inside its doorway's
+    edge at a 40 degree slant, and the UAV hit the frame. Here the doorway is truly at y 10.4-12.4: the UAV
+    passes it square to the wall, centred by the laser, then goes on to the viewpoint."""
+    agent, ual, be, scene = uav
+    ual.pos = np.array([22.7, 14.5, 6.5])
+    ual.yaw = math.pi
+    be.clock.sleep(3.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    scene.shift = (0.0, 0.0)
+    scene.boxes = wall_boxes(6.6) + [(17.7, 6.9, 17.9, 10.4), (17.7, 12.4, 17.9, 19.3)]
+    track = Track(be, ual, (17.7, 17.9), UAV_R, 11.0, axis=0)
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 8.5, 6.5, math.pi)]))
+    assert s.wait(200) == 'succeeded', s.result.message
+    assert any('doorway' in m for m in be.infos), be.infos
+    assert track.within(10.4 + UAV_R, 12.4 - UAV_R), (min(track.xs), max(track.xs))
+    assert np.linalg.norm(ual.pos[:2] - (15.7, 8.5)) < 0.3, ual.pos

@@ -89,7 +89,8 @@ class SearchIndoor(AgentTask):
             try:
                 if crosses_outline(a.position(), wp):
                     self.passage.to(wp)
-                elif not self.passage.doorway(wp):
+                else:
+                    self.passage.doorway(wp)             # through a doorway on the way, if there is one
                     self.call_task_or_raise('move', {'waypoint': (wp, yaw)})
             except TaskError as e:
                 raise TaskError(f'waypoint {i + 1}: {e}')

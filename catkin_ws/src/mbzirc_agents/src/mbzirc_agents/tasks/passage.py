@@ -25,7 +25,7 @@ from mbzirc_arena.c3 import ARENA
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
-from ..openings import SeenOpening, find_opening, side_clearances
+from ..openings import SeenOpening, find_opening, find_openings, side_clearances
 from .uav_motion import hold_box
 
 CENTRED_SCANS = 3          # consecutive centred control steps before going through
@@ -35,6 +35,7 @@ VERTICAL_TOLERANCE = 0.15                   # m off a window's middle height tha
 # Interior doorways are not in the arena model (a team does not know the interior): any opening of
 # DOORWAY_WIDTH +- DOORWAY_TOLERANCE m in a wall across an indoor leg is passed as a door.
 DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
+DOORWAY_MISS = 1.0         # m: a leg meeting the wall this far beside a doorway is meant for it (GNSS error)
 
 
 def nearest_opening(kind: str, point) -> Any:
@@ -131,9 +132,10 @@ class LaserPassage:
 
     def doorway(self, target) -> bool:
         """An indoor leg to target: when the laser sees a wall across it, nearer than target, with a
-        doorway the leg goes through, pass that doorway guided and return True (the robot is then past it,
-        at target's distance); else False: the caller moves straight as before. The scan is looked at
-        along the leg (the laser sees all around): no turn unless there is a doorway."""
+        doorway, pass that doorway guided, square to the wall, as deep as target (True: the caller then
+        moves on to target); else False. The scan is looked at along the leg and square to the nearest
+        axis (the laser sees all around; an oblique leg meets a wall at a slant the finder does not take):
+        no turn unless there is a doorway."""
         a = self.agent
         if not a.p.laser_openings:
             return False
@@ -145,18 +147,30 @@ class LaserPassage:
         if msg is None:
             return False
         here = a.position()
-        dx, dy = target[0] - here[0], target[1] - here[1]
-        length = math.hypot(dx, dy)
-        heading = math.atan2(dy, dx)
-        seen = find_opening(msg.ranges, msg.angle_min + here[3] - heading, msg.angle_increment, DOORWAY_WIDTH,
-                            tolerance=DOORWAY_TOLERANCE, range_min=msg.range_min,
-                            range_max=msg.range_max if msg.range_max > 0 else math.inf)
-        if seen is None or seen.distance > length - 0.3 or abs(seen.lateral) > seen.width / 2:
-            return False
-        a.backend.loginfo(f'[{self.task.name}] a doorway {seen.width:.2f} m wide {seen.distance:.1f} m ahead '
-                          f'on the leg ({seen.lateral:+.2f} m aside): passing it with the laser')
-        self.go_through('doorway', heading, length, width=seen.width, prior=seen.lateral)
-        return True
+        leg = np.array([target[0] - here[0], target[1] - here[1]])
+        length = float(np.linalg.norm(leg))
+        theta = math.atan2(leg[1], leg[0])
+        for h in (theta, round(theta / (math.pi / 2)) * (math.pi / 2)):
+            c, s = math.cos(theta - h), math.sin(theta - h)
+            if c < 0.3:
+                continue
+            found = find_openings(msg.ranges, msg.angle_min + here[3] - h, msg.angle_increment, DOORWAY_WIDTH,
+                                  tolerance=DOORWAY_TOLERANCE, range_min=msg.range_min,
+                                  range_max=msg.range_max if msg.range_max > 0 else math.inf)
+            if not found:
+                continue
+            t = found[0].distance / c                # along the leg, where it meets the wall
+            if t > length - 0.3:
+                continue                             # the wall is beyond the leg's end
+            seen = min(found, key=lambda o: abs(o.lateral - t * s))
+            if abs(seen.lateral - t * s) > seen.width / 2 + DOORWAY_MISS:
+                continue                             # the leg meets the wall, not the doorway
+            depth = float(np.dot(leg, (math.cos(h), math.sin(h))))
+            a.backend.loginfo(f'[{self.task.name}] a doorway {seen.width:.2f} m wide {seen.distance:.1f} m ahead '
+                              f'({seen.lateral:+.2f} m aside) on the leg: passing it with the laser')
+            self.go_through('doorway', h, depth, width=seen.width, prior=seen.lateral)
+            return True
+        return False
 
     def _cross(self, target, heading: float, length: float) -> None:
         """Laser-guided (go_through) when ~laser_openings, else the task's straight `move` to target."""
