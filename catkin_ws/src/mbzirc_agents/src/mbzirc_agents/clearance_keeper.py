@@ -54,6 +54,13 @@ class ClearanceKeeper:
         """The guard bounds commands while the UAL flies under the agent's commands."""
         return self.enabled and self.agent.ual_state in (C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL)
 
+    def vertical_error(self) -> Optional[float]:
+        """The vertical GNSS error e (GNSS z - true z) while the altimeter gives a fresh estimate, else None:
+        the true height of base_link is the GNSS height minus e (e.g. to centre in a window)."""
+        with self.lock:
+            g = self.guard
+            return g.error if g.fresh(self.agent.backend.now()) else None
+
     # ---- commands ------------------------------------------------------------------------------------------
     def set_point_z(self, x: float, y: float, z: float) -> float:
         """The z the UAL is (or would be) sent for a requested (x, y, z)."""

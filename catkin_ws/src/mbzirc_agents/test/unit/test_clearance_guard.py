@@ -58,6 +58,7 @@ def test_a_low_go_to_with_the_fix_reading_high(guard):
             assert ual.min_flying_z >= 0.5 - 0.02              # the clearance, by the true height
             assert ual.pos[2] == pytest.approx(0.6, abs=0.05)  # clearance + hysteresis
             assert agent.clearance.raised >= 1
+            assert agent.clearance.vertical_error() == pytest.approx(0.9, abs=0.01)
         else:
             assert ual.min_flying_z <= 0.0                     # on the ground: ual_sim's crash
     finally:
