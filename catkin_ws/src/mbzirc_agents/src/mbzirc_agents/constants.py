@@ -44,9 +44,9 @@ UGV_DOOR_INSIDE = (_DOOR_B.centre[0] - 2.3 * _DOOR_B.normal[0], _DOOR_B.centre[1
 # Viewpoints (x, y, yaw) ~5 m from where the ground-floor indoor fires were in the simulated world: private
 # knowledge (docs/arena_knowledge.md), to be replaced by exploration (issue 18). The UGV's level thermal
 # camera only sees a fire 1.5 m up from about 5 m away.
-# The first one stands 1.8 m off facade C's inner face (it stood 0.8 m off: with the UGV's 0.6 m radius and a
-# metre of GNSS error it hit the wall under realistic uncertainty, seed 101).
-UGV_INDOOR_PATH = [(13.4, 8.5, 0.0), (16.5, 11.0, 0.0), (19.5, 11.0, 0.0), (23.0, 16.5, 3.14159)]
+# The first and the last stand 1.8 m off facade C's and D's inner faces (they stood 0.8 and 1.0 m off: with
+# the UGV's 0.6 m radius and a metre of GNSS error it hit the wall under realistic uncertainty, seeds 101, 102).
+UGV_INDOOR_PATH = [(13.4, 8.5, 0.0), (16.5, 11.0, 0.0), (19.5, 11.0, 0.0), (22.2, 16.5, 3.14159)]
 
 # ---- agent defaults ---------------------------------------------------------------------------------
 CONTROL_RATE_HZ = 10.0          # every control / monitoring loop of a task

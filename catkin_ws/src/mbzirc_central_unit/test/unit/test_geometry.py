@@ -96,3 +96,12 @@ def test_elevators_keep_clear_of_outdoor_fire_holders_and_the_building():
     for e in G.elevator_points():
         assert min(math.dist(e, h[:2]) for h in c3.GROUND_FIRE_PLACES) > 4.0
         assert G.obstacle_rect(1.0, 3.0) is None or not G.inside(e, G.obstacle_rect(1.0, 3.0))
+
+
+def test_facade_of_an_estimate_off_the_wall():
+    """A facade fire estimate 0.3-1 m off its face (GNSS error) belongs to the nearest facade: its viewpoint
+    stands in front of that face, never along another one."""
+    assert G.facade_of((12.2, 19.8, 6.2)) == "A"
+    x, y, z, yaw = G.viewpoint((12.2, 19.8, 6.2))
+    assert y > 21.0 and abs(yaw + math.pi / 2) < 1e-9
+    assert G.facade_of((10.6, 8.5, 6.0)) == "C" and G.facade_of((25.0, 12.7, 10.5)) == "D"
