@@ -28,6 +28,8 @@ try:  # the simulator's types: optional so that the recorder still runs against 
 except ImportError:  # pragma: no cover - depends on the workspace
     FireStateArray = Score = None
 
+SCORE_CLOCK_SLACK_S = 10.0   # s: a /sim/score may be computed at a clock a little ahead of ours
+
 
 class MissionRecorder:
     """Keeps a `MissionRecord` up to date and closes the trial; see the package README for params."""
@@ -52,6 +54,7 @@ class MissionRecorder:
         os.makedirs(self.out_dir, exist_ok=True)
         self.done_pub = rospy.Publisher("~done", Bool, queue_size=1, latch=True)
         self.done_pub.publish(Bool(False))
+        self.progress_pub = rospy.Publisher("~progress", String, queue_size=1)
         ids = [M.UGV_ID] if self.extra["ugv"] else []
         ids += [str(i) for i in range(1, self.extra["uavs"] + 1)]
         self.subs = [rospy.Subscriber(f"/{M.robot_ns(i)}/data_feed", AgentDataFeed, self._on_feed,
@@ -90,6 +93,13 @@ class MissionRecorder:
                                      f.active, f.extinguished, f.progress, f.extinguish_time)
 
     def _on_score(self, msg: Any) -> None:
+        # the record keeps the largest elapsed time and ends the trial past ~duration: a non-finite score,
+        # or a time the clock has not reached yet (it would end the trial at once), is refused
+        if not (math.isfinite(msg.elapsed) and math.isfinite(msg.score)) \
+                or msg.elapsed > rospy.get_time() + SCORE_CLOCK_SLACK_S:
+            rospy.logerr_throttle(10.0, f"mission_recorder: /sim/score refused: elapsed {msg.elapsed} s "
+                                  f"(clock {rospy.get_time():.1f} s), score {msg.score}")
+            return
         if self.sim_start_wall is None:  # the wall clock of the trial starts with the simulator's
             self.sim_start_wall = time.time()
             self.sim_at_start = float(msg.elapsed)
@@ -125,7 +135,9 @@ class MissionRecorder:
             reason = self.rec.finished(self.expected_fires)
         if self.rec.elapsed - self.last_progress >= self.progress_period or reason:
             self.last_progress = self.rec.elapsed
-            print(self.progress_line(), flush=True)
+            line = self.progress_line()
+            print(line, flush=True)
+            self.progress_pub.publish(String(line))
         if reason:
             self.finish(reason)
 
