@@ -11,6 +11,9 @@ TEMPLATE_FRAME = "arena"        # header.frame_id of the template every mutation
 TEMPLATE_STRING = "1"           # other strings of the template (a plausible robot id)
 SINGLE_FIELD_FLOATS = 8         # float fields that get a NaN / +inf of their own (the rest of the message valid)
 MAX_DEPTH = 6                   # recursion limit when populating nested messages
+HUGE_PICKLE_CHARS = 9 << 20     # base64 chars of the huge pickle (smach_ros refuses local_data over 8 MiB)
+DEEP_PICKLE_LEVELS = 100_000    # nested lists of the deep pickle
+PICKLE_MARKER_PREFIX = "mbzirc_fuzz_pickle_code_ran_"  # file the code-running pickles would create
 
 # ---- fuzz runner ------------------------------------------------------------------------------------
 DEFAULT_RATE_HZ = 20.0          # malformed messages per second per topic (keeps CPU modest)
@@ -19,6 +22,7 @@ SERVICE_CALL_TIMEOUT_S = 3.0    # a service that does not answer within this is 
 MAX_SERVICE_TIMEOUTS = 2        # stop fuzzing a service after this many unanswered calls
 CHECK_EVERY = 4                 # liveness (getPid) after every 4th case: a death names the last 4 cases
 SETTLE_S = 0.3                  # after each topic: let the callbacks run before checking liveness
+STRUCTURE_TIMEOUT_S = 6.0       # wait for an introspection server's container_structure (sent every 2 s)
 XMLRPC_TIMEOUT_S = 3.0          # getPid on a node
 DEFAULT_EXCLUDE_TOPICS = ("/clock", "/rosout", "/rosout_agg")
 DEFAULT_EXCLUDE_SERVICES = ("*/get_loggers", "*/set_logger_level")

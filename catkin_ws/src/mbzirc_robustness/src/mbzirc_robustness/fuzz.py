@@ -462,3 +462,78 @@ def generate_cases(cls: type, max_cases: int = C.DEFAULT_MAX_CASES, seed: int = 
     raws = [r for r in raws if r.payload not in seen]
     out += raws[: max(0, max_cases - len(out))]
     return out
+
+
+# ---------------------------------------------------------------------------------------------------
+# crafted pickles for SMACH introspection servers
+# ---------------------------------------------------------------------------------------------------
+SMACH_INIT_TYPE = "smach_msgs/SmachContainerInitialStatusCmd"
+
+
+def pickle_marker_path(tag: str) -> str:
+    """The file the code-running pickles would create: it must never exist after they were sent."""
+    import os
+    import tempfile
+    return os.path.join(tempfile.gettempdir(), f"{C.PICKLE_MARKER_PREFIX}{tag}")
+
+
+def _b64(raw: bytes) -> str:
+    import base64
+    return base64.b64encode(raw).decode("ascii")
+
+
+def _global(module: str, name: str) -> bytes:
+    return b"c" + module.encode() + b"\n" + name.encode() + b"\n"
+
+
+def _short_str(text: str) -> bytes:
+    data = text.encode()
+    return b"X" + len(data).to_bytes(4, "little") + data
+
+
+def crafted_pickles(marker: str) -> list[tuple[str, str]]:
+    """(label, local_data) of pickles that a trusting unpickler (``pickle.loads``) would suffer.
+
+    - code: a pickle whose load calls ``os.system`` / ``builtins.exec`` to create ``marker`` (the runner
+      checks the file never appears: the receiver ran no code of ours);
+    - huge: a payload past any sane size (``C.HUGE_PICKLE_CHARS`` of base64), and a reference bomb (a few
+      hundred bytes naming 2^60 values through shared lists);
+    - deep: 100 000 nested lists (a recursive reader overflows its stack);
+    - truncated: half of a valid pickle, and text that is not base64 at all.
+    Each is a dict at the top, as ``local_data`` must be, so that only the content is wrong.
+    """
+    import pickle
+    proto = b"\x80\x02"
+    key = _short_str("fuzz")
+
+    def in_dict(value: bytes) -> bytes:
+        return proto + b"}" + key + value + b"s."
+
+    system = in_dict(_global("os", "system") + _short_str(f"touch {marker}") + b"\x85R")
+    exec_ = in_dict(_global("builtins", "exec") + _short_str(f"open({marker!r}, 'w').close()") + b"\x85R")
+    bomb = [b"x"]
+    for _ in range(60):
+        bomb = [bomb, bomb]
+    depth = C.DEEP_PICKLE_LEVELS
+    deep = in_dict(b"]" * depth + b"a" * (depth - 1))
+    valid = pickle.dumps({"fuzz": list(range(50))}, 2)
+    huge_raw = pickle.dumps({"fuzz": "x" * (C.HUGE_PICKLE_CHARS * 3 // 4)}, 2)
+    return [
+        ("pickle: calls os.system (would run code)", _b64(system)),
+        ("pickle: calls builtins.exec (would run code)", _b64(exec_)),
+        (f"pickle: {C.HUGE_PICKLE_CHARS} chars of base64", _b64(huge_raw)),
+        ("pickle: reference bomb (2^60 values in a few hundred bytes)", _b64(pickle.dumps({"fuzz": bomb}, 2))),
+        (f"pickle: {depth} nested lists", _b64(deep)),
+        ("pickle: valid pickle truncated by half", _b64(valid[: len(valid) // 2])),
+        ("pickle: not base64", "!!not base64 at all!!"),
+    ]
+
+
+def pickle_cases(cls: type, path: str, marker: str) -> list[FuzzCase]:
+    """Init commands (``SmachContainerInitialStatusCmd``) addressed to container ``path`` (a real one,
+    so that the server gets past its path check) with no initial state and a crafted ``local_data``."""
+    out = []
+    for label, text in crafted_pickles(marker):
+        msg = cls(path=path, initial_states=[], local_data=text)
+        out.append(FuzzCase(f"{label} (to {path})", serialize(msg)))
+    return out

@@ -22,7 +22,8 @@ from rosgraph_msgs.msg import Log
 
 from mbzirc_robustness import constants as C
 from mbzirc_robustness import graph as G
-from mbzirc_robustness.fuzz import FuzzCase, generate_cases, message_class, populated, serialize
+from mbzirc_robustness.fuzz import (SMACH_INIT_TYPE, FuzzCase, generate_cases, message_class, pickle_cases,
+                                    pickle_marker_path, populated, serialize)
 from mbzirc_robustness.probes import Probe, ProbeRunner
 from mbzirc_robustness.report import FuzzReport
 
@@ -174,7 +175,38 @@ class GraphFuzzer:
 
     def _cases(self, tg: G.Target, cls: type) -> list[FuzzCase]:
         cases = generate_cases(cls, self.max_cases, seed=self.seed + _stable_hash(tg.name))
+        if tg.type == SMACH_INIT_TYPE:
+            cases = self._pickle_cases(tg, cls) + cases
         return [c for c in cases if not G.matches(f"{tg.name}: {c.label}", self.exclude_cases)]
+
+    # ---- SMACH introspection: crafted pickles ------------------------------------------------------
+    def _marker(self) -> str:
+        return pickle_marker_path(str(os.getpid()))
+
+    def _pickle_cases(self, tg: G.Target, cls: type) -> list[FuzzCase]:
+        """Crafted pickles for an introspection server's ``container_init``, addressed to its root container
+        (read from its ``container_structure``, published every 2 s): with a wrong path the server would
+        refuse the command before it ever reads the pickle."""
+        from smach_msgs.msg import SmachContainerStructure
+        structure = tg.name[: -len("container_init")] + "container_structure"
+        try:
+            path = rospy.wait_for_message(structure, SmachContainerStructure, timeout=C.STRUCTURE_TIMEOUT_S).path
+        except (rospy.ROSException, rospy.ROSInterruptException):
+            self._report.add_skipped(f"{tg.name}: crafted pickles", f"no {structure} within "
+                                     f"{C.STRUCTURE_TIMEOUT_S:.0f} s: container path unknown")
+            return []
+        if os.path.exists(self._marker()):
+            os.remove(self._marker())
+        return pickle_cases(cls, path, self._marker())
+
+    def _check_no_code_ran(self, tg: G.Target, report: FuzzReport, labels: list[str]) -> None:
+        """After the crafted pickles: the file their code would create must not exist."""
+        if not any(lab.startswith("pickle: ") for lab in labels):
+            return
+        ran = os.path.exists(self._marker())
+        for n in tg.nodes:
+            report.add_function_check(n, f"{tg.name}: crafted pickles", "runs no code from a pickle", not ran,
+                                      f"{self._marker()} was created: a pickle's code ran" if ran else "ok")
 
     def _fuzz_one(self, tg: G.Target, report: FuzzReport, sink: _LogSink) -> None:
         if rospy.is_shutdown():
@@ -327,6 +359,7 @@ class GraphFuzzer:
         except Exception as exc:  # noqa: BLE001 - a type we cannot load is reported, not fatal
             report.add_skipped(tg.name, f"cannot load message type {tg.type}: {exc}")
             return
+        self._report = report
         cases = self._cases(tg, cls)
         pub = _PUBLISHERS.get(tg.name)
         if pub is None or pub.type != tg.type:
@@ -345,6 +378,7 @@ class GraphFuzzer:
         time.sleep(C.SETTLE_S)
         self._check(tg, report, _window_label(cases, sent) + " (found after the last case)")
         labels = [c.label for c in cases]
+        self._check_no_code_ran(tg, report, labels)
         if self.stress and not rospy.is_shutdown() and any(report.nodes[n]["alive"] for n in tg.nodes):
             self._report = report
             n_stress, stress_labels = self._send_stress(tg, cls, pub)

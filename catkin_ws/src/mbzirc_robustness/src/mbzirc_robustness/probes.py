@@ -5,7 +5,13 @@ whose table is full of garbage passes a liveness check (`getPid`) and fails the 
 node a valid input and checks a valid output:
 - `output` only: the topic must be published within `timeout` s (a periodic output: the estimator's tracks,
   the central unit's heartbeat (sent by its decision tick), an agent's data_feed);
-- `stimulus` + `output`: a valid message (YAML of its fields) is published, then the output must come;
+- `stimulus` + `output`: valid messages are published, then the output must come. A stimulus is one dict
+  or a list of them, sent in order: `{topic, type, yaml}` (a message from YAML of its fields), or
+  `{rgbd_facade: <camera namespace>, frame_id: ...}` (a synthetic facade holder seen by a RealSense:
+  camera_info, then synchronised colour + depth, stimuli.py);
+- `expect` (a text or a list): the output message (its YAML text) must contain every one. `@SEQ@` in a
+  stimulus's YAML and in `expect` is replaced by the number of the run, so that an output that merely
+  repeats an old state (a periodic line that ignores its input) cannot pass;
 - `service` + `request` (+ `expect`): a valid request must be answered, its response containing `expect`.
 
 A probe is a dict (the `~probes` rosparam of the fuzz rostests):
@@ -18,9 +24,13 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import yaml
+
+SEQ = "@SEQ@"                  # replaced by the run's number in stimuli and expected texts
+STIMULUS_GAP_S = 0.2           # between two groups of a stimulus (camera_info before the images)
+POLL_S = 0.05
 
 
 @dataclass
@@ -28,22 +38,28 @@ class Probe:
     """One functional check of one node (see the module docstring)."""
     node: str
     output: str = ''
-    stimulus: dict[str, Any] = field(default_factory=dict)
+    stimuli: list[dict[str, Any]] = field(default_factory=list)
     service: str = ''
     request: str = ''
-    expect: str = ''
+    expect: list[str] = field(default_factory=list)
     timeout: float = 3.0
 
     @staticmethod
     def from_dict(d: dict[str, Any]) -> "Probe":
-        return Probe(node=str(d['node']), output=str(d.get('output', '')), stimulus=dict(d.get('stimulus') or {}),
+        stim = d.get('stimulus') or []
+        expect = d.get('expect') or []
+        return Probe(node=str(d['node']), output=str(d.get('output', '')),
+                     stimuli=[dict(s) for s in (stim if isinstance(stim, list) else [stim])],
                      service=str(d.get('service', '')), request=str(d.get('request', '')),
-                     expect=str(d.get('expect', '')), timeout=float(d.get('timeout', 3.0)))
+                     expect=[str(e) for e in (expect if isinstance(expect, list) else [expect])],
+                     timeout=float(d.get('timeout', 3.0)))
 
     def describe(self) -> str:
+        wanted = f' with {", ".join(map(repr, self.expect))}' if self.expect else ''
         if self.service:
-            return f'{self.service} answers a valid request' + (f' with {self.expect!r}' if self.expect else '')
-        return (f'{self.stimulus["topic"]} -> ' if self.stimulus else '') + f'{self.output} published'
+            return f'{self.service} answers a valid request{wanted}'
+        inputs = ', '.join(s.get('topic') or f"RGB-D facade holder on {s.get('rgbd_facade')}" for s in self.stimuli)
+        return (f'{inputs} -> ' if inputs else '') + f'{self.output} published{wanted}'
 
 
 def fill(cls: type, text: str) -> Any:
@@ -56,66 +72,138 @@ def fill(cls: type, text: str) -> Any:
     return msg
 
 
-class ProbeRunner:
-    """Runs probes against the live graph (needs rospy initialised)."""
+class RosBus:
+    """The probes' access to the live graph (rospy): one subscriber per output, one publisher per topic."""
 
-    def __init__(self, probes: list[Probe]) -> None:
+    def __init__(self) -> None:
         import rospy
-        from rospy.msg import AnyMsg
         self.rospy = rospy
-        self.probes = probes
-        self.counts: dict[str, int] = {}
-        self.lock = threading.Lock()
-        self.subs = {}
-        self.pubs = {}
-        for p in probes:
-            if p.output and p.output not in self.subs:
-                self.subs[p.output] = rospy.Subscriber(p.output, AnyMsg, self._count, callback_args=p.output,
-                                                       queue_size=10)
-            if p.stimulus and p.stimulus['topic'] not in self.pubs:
-                from mbzirc_robustness.fuzz import message_class
-                cls = message_class(p.stimulus['type'])
-                self.pubs[p.stimulus['topic']] = (rospy.Publisher(p.stimulus['topic'], cls, queue_size=10), cls)
+        self.pubs: dict[str, Any] = {}
 
-    def _count(self, _msg: Any, topic: str) -> None:
+    def subscribe(self, topic: str, callback: Callable[[Callable[[], str]], None]) -> None:
+        """Calls ``callback(text)`` per message, ``text()`` giving the message as YAML text (decoded only
+        when asked: most probes only count)."""
+        from rospy.msg import AnyMsg
+
+        def on_msg(msg: Any) -> None:
+            callback(lambda: _any_msg_text(msg))
+        self.rospy.Subscriber(topic, AnyMsg, on_msg, queue_size=10)
+
+    def publish(self, topic: str, msg: Any) -> None:
+        pub = self.pubs.get(topic)
+        if pub is None:
+            pub = self.pubs[topic] = self.rospy.Publisher(topic, type(msg), queue_size=10)
+            deadline = time.monotonic() + 2.0             # a new publisher: let the node connect first
+            while pub.get_num_connections() == 0 and time.monotonic() < deadline:
+                time.sleep(POLL_S)
+        pub.publish(msg)
+
+    def stamp(self) -> Any:
+        return self.rospy.Time.now()
+
+
+def _any_msg_text(msg: Any) -> str:
+    """An AnyMsg decoded with the type its publisher announced, as YAML text ('' if undecodable)."""
+    try:
+        from mbzirc_robustness.fuzz import message_class
+        cls = message_class(msg._connection_header['type'])
+        return str(cls().deserialize(msg._buff))
+    except Exception:  # noqa: BLE001 - an undecodable output does not contain what the probe expects
+        return ''
+
+
+class WallClock:
+    now = staticmethod(time.monotonic)
+    sleep = staticmethod(time.sleep)
+
+
+class ProbeRunner:
+    """Runs probes against the graph (default: the live one through rospy, which must be initialised).
+
+    Args:
+        bus: publish / subscribe / stamp (RosBus); a unit test passes an in-process one.
+        clock: now() / sleep() (wall clock); a unit test passes a simulated one.
+    """
+
+    def __init__(self, probes: list[Probe], bus: Any = None, clock: Any = None) -> None:
+        self.bus = bus if bus is not None else RosBus()
+        self.clock = clock if clock is not None else WallClock()
+        self.probes = probes
+        self.runs = 0
+        self.counts: dict[str, int] = {}
+        self.recent: dict[str, list[tuple[int, Callable[[], str]]]] = {}
+        self.lock = threading.Lock()
+        for topic in {p.output for p in probes if p.output}:
+            self.bus.subscribe(topic, lambda text, topic=topic: self._on_output(topic, text))
+
+    def _on_output(self, topic: str, text: Callable[[], str]) -> None:
         with self.lock:
-            self.counts[topic] = self.counts.get(topic, 0) + 1
+            n = self.counts[topic] = self.counts.get(topic, 0) + 1
+            self.recent.setdefault(topic, []).append((n, text))
+            del self.recent[topic][:-20]
 
     def for_node(self, node: str) -> list[Probe]:
         return [p for p in self.probes if p.node == node]
 
     def run(self, probe: Probe) -> tuple[bool, str]:
         """(passed, what happened) for one probe."""
+        self.runs += 1
+        expect = [e.replace(SEQ, str(self.runs)) for e in probe.expect]
         if probe.service:
-            return self._call(probe)
+            return self._call(probe, expect)
         with self.lock:
             before = self.counts.get(probe.output, 0)
-        if probe.stimulus:
-            pub, cls = self.pubs[probe.stimulus['topic']]
-            try:
-                pub.publish(fill(cls, probe.stimulus.get('yaml', '')))
-            except Exception as e:  # noqa: BLE001 - a bad probe definition is the probe's failure
-                return False, f'cannot send the stimulus: {e}'
-        deadline = time.monotonic() + probe.timeout
-        while time.monotonic() < deadline:
+        try:
+            self._send(probe.stimuli)
+        except Exception as e:  # noqa: BLE001 - a bad probe definition is the probe's failure
+            return False, f'cannot send the stimulus: {e}'
+        deadline = self.clock.now() + probe.timeout
+        seen = 0
+        while True:
             with self.lock:
-                if self.counts.get(probe.output, 0) > before:
+                new = [text for n, text in self.recent.get(probe.output, []) if n > before]
+            for text in new[seen:]:
+                if all(e in text() for e in expect):
                     return True, 'ok'
-            time.sleep(0.05)
+            seen = len(new)
+            if self.clock.now() >= deadline:
+                break
+            self.clock.sleep(POLL_S)
+        if seen and expect:
+            return False, (f'{probe.output}: {seen} message(s) within {probe.timeout:.1f} s, none with '
+                           f'{", ".join(map(repr, expect))}')
         return False, f'{probe.output} not published within {probe.timeout:.1f} s'
 
-    def _call(self, probe: Probe) -> tuple[bool, str]:
+    def _send(self, stimuli: list[dict[str, Any]]) -> None:
+        """Publish the stimuli in order, a short gap between groups (see the module docstring)."""
+        from mbzirc_robustness.fuzz import message_class
+        groups: list[list[tuple[str, Any]]] = []
+        for s in stimuli:
+            if 'rgbd_facade' in s:
+                from mbzirc_robustness.stimuli import facade_holder_messages
+                groups += facade_holder_messages(str(s['rgbd_facade']), str(s.get('frame_id', '')), self.bus.stamp())
+            else:
+                text = str(s.get('yaml', '')).replace(SEQ, str(self.runs))
+                groups.append([(s['topic'], fill(message_class(s['type']), text))])
+        for k, group in enumerate(groups):
+            if k:
+                self.clock.sleep(STIMULUS_GAP_S)
+            for topic, msg in group:
+                self.bus.publish(topic, msg)
+
+    def _call(self, probe: Probe, expect: list[str]) -> tuple[bool, str]:
         import genpy
+        import rospy
         import rosservice
         out: list[tuple[bool, str]] = []
 
         def call() -> None:
             try:
                 srv_cls = genpy.message.get_service_class(rosservice.get_service_type(probe.service))
-                resp = self.rospy.ServiceProxy(probe.service, srv_cls)(fill(srv_cls._request_class, probe.request))
+                resp = rospy.ServiceProxy(probe.service, srv_cls)(fill(srv_cls._request_class, probe.request))
                 text = str(resp)
-                ok = not probe.expect or probe.expect in text
-                out.append((ok, 'ok' if ok else f'answered {text[:120]!r}, expected {probe.expect!r}'))
+                ok = all(e in text for e in expect)
+                out.append((ok, 'ok' if ok else f'answered {text[:120]!r}, expected {", ".join(map(repr, expect))}'))
             except Exception as e:  # noqa: BLE001 - not answering is the outcome
                 out.append((False, f'{type(e).__name__}: {str(e)[:120]}'))
 

@@ -161,3 +161,49 @@ def test_fuzz_report_fails_a_node_that_lost_its_function():
     assert "clock" in s["function_lost"][0]["function_lost"]
     m = merge_fuzz_reports([rep.to_dict()])
     assert not m["summary"]["all_survived"] and m["summary"]["function_lost"]
+
+
+# ---- crafted pickles for SMACH introspection servers --------------------------------------------------
+def test_pickle_cases_reach_the_container_and_each_is_what_it_says(tmp_path):
+    import base64
+    import io
+    import pickle
+
+    from smach_msgs.msg import SmachContainerInitialStatusCmd
+    marker = str(tmp_path / "ran")
+    cases = fuzz.pickle_cases(SmachContainerInitialStatusCmd, "/SM_ROOT", marker)
+    msgs = {c.label: decode(SmachContainerInitialStatusCmd, c) for c in cases}
+    assert all(m.path == "/SM_ROOT" and m.initial_states == [] for m in msgs.values())
+    by = {label.split(" (to ")[0]: m.local_data for label, m in msgs.items()}
+
+    calls = []
+
+    class Recording(pickle.Unpickler):
+        """A trusting unpickler whose globals only record the call they would make."""
+        def find_class(self, module, name):
+            return lambda *args: calls.append((module, name, args))
+
+    for label in ("pickle: calls os.system (would run code)", "pickle: calls builtins.exec (would run code)"):
+        Recording(io.BytesIO(base64.b64decode(by[label]))).load()
+    assert [(m, n) for m, n, _ in calls] == [("os", "system"), ("builtins", "exec")]
+    assert all(marker in args[0] for _, _, args in calls)
+    assert len(by[f"pickle: {fuzz.C.HUGE_PICKLE_CHARS} chars of base64"]) > fuzz.C.HUGE_PICKLE_CHARS * 0.99
+    bomb = pickle.loads(base64.b64decode(by["pickle: reference bomb (2^60 values in a few hundred bytes)"]))
+    assert len(by["pickle: reference bomb (2^60 values in a few hundred bytes)"]) < 2000 and bomb["fuzz"][0] is bomb["fuzz"][1]
+    with pytest.raises(Exception):
+        pickle.loads(base64.b64decode(by["pickle: valid pickle truncated by half"]))
+
+
+def test_smach_ros_refuses_every_crafted_pickle_and_runs_no_code(tmp_path):
+    """What the agents' introspection servers do with them (smach_ros's safe decoder)."""
+    import os
+
+    from smach_ros.userdata_codec import DecodeError, contains_opaque, decode_local_data
+    marker = str(tmp_path / "ran")
+    for label, text in fuzz.crafted_pickles(marker):
+        try:
+            data = decode_local_data(text)
+        except DecodeError:
+            continue
+        assert contains_opaque(data), f"{label}: accepted as plain data"
+    assert not os.path.exists(marker)
