@@ -86,11 +86,7 @@ class LaserPassage:
         its clearance guard estimates from the altimeter (clearance.py); None without a fresh estimate (or
         a guard: the UGV). Why: the GNSS height is off by decimetres and a window is 2 m tall."""
         keeper = getattr(self.agent, 'clearance', None)
-        if keeper is None:
-            return None
-        with keeper.lock:
-            g = keeper.guard
-            e = g.error if g.fresh(self.agent.backend.now()) else None
+        e = None if keeper is None else keeper.vertical_error()
         return None if e is None else float(self.agent.position()[2] - e)
 
     def _fresh_scan(self) -> Optional[Any]:
