@@ -207,3 +207,10 @@ def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.4 + UAV_R, 12.4 - UAV_R), (min(track.xs), max(track.xs))
     assert np.linalg.norm(ual.pos[:2] - (15.7, 8.5)) < 0.3, ual.pos
+
+
+def test_the_passage_reserves_the_way_aside_to_the_opening():
+    """The airspace reserved for a passage holds the sideways move to the opening (3.5 m here) too."""
+    from mbzirc_agents.tasks.passage import passage_box
+    lo, hi = passage_box((22.7, 14.5, 6.5), (15.7, 14.5, 6.5), math.pi, 3.5, 1.0)
+    assert lo[1] <= 11.0 - 1.0 and hi[1] >= 14.5 + 1.0 and lo[0] <= 15.7 - 1.0 and hi[0] >= 22.7 + 1.0

@@ -46,6 +46,15 @@ def nearest_opening(kind: str, point) -> Any:
     return min(found, key=lambda o: math.dist(o.centre, point[:3]))
 
 
+def passage_box(start, end, heading: float, aside: float, margin: float) -> tuple:
+    """The airspace of a passage from start to end along heading that first moves `aside` m sideways (body
+    y, to the opening's middle): the box around both straight legs, grown by margin."""
+    shift = aside * np.array([-math.sin(heading), math.cos(heading), 0.0])
+    lo, hi = swept_box(start, end, margin)
+    lo2, hi2 = swept_box(np.add(start, shift), np.add(end, shift), margin)
+    return np.minimum(lo, lo2), np.maximum(hi, hi2)
+
+
 def crosses_outline(a, b) -> bool:
     """True when the straight leg a -> b goes from outside a building's outline to inside or back."""
     return in_footprint(a, standing_at(a, C.BUILDINGS)) != in_footprint(b, standing_at(b, C.BUILDINGS))
@@ -194,7 +203,7 @@ class LaserPassage:
                              tolerance=a.p.opening_tolerance)
         u = np.array([math.cos(heading), math.sin(heading), 0.0])
         end = start[:3] + length * u
-        a.reserve(task, 'go_to', swept_box(start[:3], end, a.p.region_margin))
+        a.reserve(task, 'go_to', passage_box(start[:3], end, heading, prior, a.p.region_margin))
         if abs(math.remainder(start[3] - heading, 2 * math.pi)) > a.p.yaw_tolerance:
             a.move_to(task, start[:3], heading, f'turning to face the {kind}')
         try:
