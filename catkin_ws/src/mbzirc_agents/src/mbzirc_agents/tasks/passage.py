@@ -173,7 +173,10 @@ class LaserPassage:
             depth = float(np.dot(leg, (math.cos(h), math.sin(h))))
             a.backend.loginfo(f'[{self.task.name}] a doorway {seen.width:.2f} m wide {seen.distance:.1f} m ahead '
                               f'({seen.lateral:+.2f} m aside) on the leg: passing it with the laser')
-            self.go_through('doorway', h, depth, width=seen.width, prior=seen.lateral)
+            # a UAV passes at the leg's target height, true by its altimeter (the doorway may be lower than
+            # the window it came in by: 2.2 m high on the ground floor of ual_sim's tower)
+            height = float(target[2]) if a.ROBOT_TYPE == 'uav' else None
+            self.go_through('doorway', h, depth, width=seen.width, prior=seen.lateral, height=height)
             return True
         return False
 
@@ -185,20 +188,20 @@ class LaserPassage:
             self.task.call_task_or_raise('move', {'waypoint': (tuple(target[:3]), heading)})
 
     def go_through(self, kind: str, heading: float, length: float, width: Optional[float] = None,
-                   prior: Optional[float] = None) -> None:
+                   prior: Optional[float] = None, height: Optional[float] = None) -> None:
         """From here, through the `kind` ('window' | 'door' | 'doorway') ahead along `heading` (rad): centre on
         it, then `length` m along the heading from here (GNSS progress). TaskError (holding) when it cannot.
-        Width and prior (m, where it is aside): the arena model's nearest window / door unless given."""
+        Width and prior (m, where it is aside): the arena model's nearest window / door unless given; height
+        (arena z a UAV centres on with its altimeter): a window's middle unless given."""
         a, task = self.agent, self.task
         start = a.position()
-        height = None            # the window's middle height, which a UAV centres on with its altimeter
         if width is None or prior is None:
             model = nearest_opening(kind, start)
             if model is None:
                 raise TaskError(f'the arena model has no {kind}')
             width = a.p.opening_width or model.width
             prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
-            height = model.centre[2] if kind == 'window' else None
+            height = model.centre[2] if kind == 'window' and height is None else height
         ctl = OpeningPassage(standoff=a.p.opening_standoff, speed=a.p.opening_speed,
                              tolerance=a.p.opening_tolerance)
         u = np.array([math.cos(heading), math.sin(heading), 0.0])
@@ -242,15 +245,16 @@ class LaserPassage:
         a.send_velocity((0.0, 0.0, 0.0), yaw_rate_to(a.position()[3], heading))
 
     def _vertical(self, height: Optional[float]) -> Tuple[float, bool]:
-        """(vz, at the height) towards a window's middle height with the altimeter; (0, True) without a
-        height to keep or a fresh reading (then the GNSS height is all there is; warned, throttled)."""
+        """(vz, at the height) towards the height to pass at (a window's middle, a doorway leg's target), true
+        by the altimeter; by the GNSS height without a fresh estimate (warned, throttled); (0, True)
+        without a height to keep."""
         if height is None:
             return 0.0, True
         z = self.height_now()
         if z is None:
-            self.agent.backend.logerr_throttle(5.0, f'[{self.task.name}] no usable altimeter reading: the '
-                                                    'window is passed at the GNSS height')
-            return 0.0, True
+            self.agent.backend.logerr_throttle(5.0, f'[{self.task.name}] no usable altimeter estimate: the '
+                                                    'opening is passed at the GNSS height')
+            z = float(self.agent.position()[2])
         dz = height - z
         return float(np.clip(VERTICAL_GAIN * dz, -VERTICAL_VMAX, VERTICAL_VMAX)), abs(dz) <= VERTICAL_TOLERANCE
 
