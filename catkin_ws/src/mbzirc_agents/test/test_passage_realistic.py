@@ -25,6 +25,7 @@ from mbzirc_agents import constants as C
 BIAS_MIN = 0.7                # m of GNSS bias along the wall before a passage starts
 UAV, UGV = 2, 0
 WINDOW = (15.5, 19.5, 7.5)    # facade A, floor 1: x 14.5-16.5 (arena model), wall y 19.3-19.5
+DOORWAY_WINDOW = (24.2, 14.5, 7.5)   # facade D, floor 1 (arena model)
 DOOR_X = (13.0, 15.5)         # facade B door (arena model), wall y 6.7-6.9
 UAV_R, UGV_R = 0.35, 0.6      # ual_sim's collision radii (the test's referee knowledge)
 
@@ -136,6 +137,30 @@ class TestPassageRealistic(unittest.TestCase):
         self.assertEqual(self.crashed, [])
         self.assertGreater(self.sim.poses[UAV][1], 19.5 + UAV_R, f'not out: {self.sim.poses[UAV]}')
         self.check_crossing(UAV, 19.4, (x - 1.0, x + 1.0), UAV_R)
+
+    def test_3_uav_through_the_interior_doorway_at_a_slant(self):
+        """Mission seed 101's crash: in through facade D's first-floor window, then a 40-degree leg to the
+        viewpoint (15.7, 8.5, 6.5) west of the interior wall (x 17.7-17.9), whose doorway (y 10.0-12.0, up to
+        z 7.2, ground truth) the leg meets near its edge; and back out the same way."""
+        x, y, z = DOORWAY_WINDOW
+        state, res = run(UAV, 'go_to', 'GoTo', 200, waypoint=pose(x + 2.0, y, z, math.pi))
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        self.trace[UAV].clear()
+        state, res = run(UAV, 'enter_building', 'EnterBuilding', 200, floor=1, entry=pose(x + 2.0, y, z, math.pi))
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+        for path in ([pose(15.7, 8.5, 6.5, math.pi)], [pose(x - 1.5, y, z, 0.0)], [pose(x + 2.0, y, z, 0.0)]):
+            state, res = run(UAV, 'search_indoor', 'SearchIndoor', 200, floor=1, path=path)
+            self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
+            self.assertEqual(self.crashed, [])
+        self.assertGreater(self.sim.poses[UAV][0], 24.2 + UAV_R, f'not out: {self.sim.poses[UAV]}')
+        t = self.trace[UAV]
+        ys = [(a[1] + b[1]) / 2 for a, b in zip(t[:-1], t[1:]) if (a[0] - 17.8) * (b[0] - 17.8) <= 0 and a[0] != b[0]]
+        self.assertEqual(len(ys), 2, f'crossings of the interior wall: {ys}')
+        for v in ys:
+            self.assertTrue(10.0 + UAV_R < v < 12.0 - UAV_R, f'crossed the interior wall at y {v:.2f}')
+        rospy.loginfo(f'robot {UAV}: crossed the interior wall at true y {[round(v, 2) for v in ys]} '
+                      '(doorway 10.0-12.0)')
+
 
 
 if __name__ == '__main__':

@@ -173,9 +173,9 @@ class LaserPassage:
             depth = float(np.dot(leg, (math.cos(h), math.sin(h))))
             a.backend.loginfo(f'[{self.task.name}] a doorway {seen.width:.2f} m wide {seen.distance:.1f} m ahead '
                               f'({seen.lateral:+.2f} m aside) on the leg: passing it with the laser')
-            # a UAV passes at the leg's target height, true by its altimeter (the doorway may be lower than
-            # the window it came in by: 2.2 m high on the ground floor of ual_sim's tower)
-            height = float(target[2]) if a.ROBOT_TYPE == 'uav' else None
+            # a UAV passes at the lower of its height and the leg's target height, true by its altimeter (a
+            # doorway may be lower than the window it came in by: up to 2.2 m above the floor in ual_sim)
+            height = min(float(target[2]), float(here[2])) if a.ROBOT_TYPE == 'uav' else None
             self.go_through('doorway', h, depth, width=seen.width, prior=seen.lateral, height=height)
             return True
         return False
