@@ -144,7 +144,8 @@ class GraphFuzzer:
         report = FuzzReport()
         for n in nodes:
             report.add_node(n, G.query_pid(self.master, n, self.me))
-        sink = _LogSink(set(nodes))
+        sink = self._sink = _LogSink(set(nodes))
+        self._garbage: list = []
         sub = rospy.Subscriber("/rosout", Log, sink, queue_size=500)
         time.sleep(0.5)  # let /rosout publishers connect to us
         self._baseline(report)
@@ -160,6 +161,7 @@ class GraphFuzzer:
                     self._fuzz_one(tg, report, sink)
                     self._probe(tg.nodes, report, tg.name)
                 targets = self.targets()  # inputs created while we fuzzed (lazy subscribers)
+            self._send_garbage(report)
             if self.fuzz_clock and not rospy.is_shutdown():
                 self._clock_jump(report, nodes)
             time.sleep(C.SETTLE_S)
@@ -366,6 +368,33 @@ class GraphFuzzer:
             pub = rospy.Publisher(tg.name, raw_message_class(cls), queue_size=C.DEFAULT_MAX_CASES)
             _PUBLISHERS[tg.name] = pub
         connected = self._wait_connected(tg, pub)
+        typed, garbage = [c for c in cases if c.typed], [c for c in cases if not c.typed]
+        sent = self._send_cases(tg, report, pub, typed)
+        labels = [c.label for c in typed]
+        self._check_no_code_ran(tg, report, labels)
+        if self.stress and not rospy.is_shutdown() and any(report.nodes[n]["alive"] for n in tg.nodes):
+            n_stress, stress_labels = self._send_stress(tg, cls, pub)
+            sent += n_stress
+            labels += stress_labels
+        report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected, labels=labels)
+        # byte garbage at the very end of the run (_send_garbage): a rospy subscriber drops our connection at
+        # the first message it cannot deserialize and never hears from us again (probe_sender.py), so
+        # anything sent after it on that topic (this topic's stress, another goal's cancel race) would be lost
+        self._garbage.append((tg, pub, garbage, report.inputs[-1]))
+
+    def _send_garbage(self, report: FuzzReport) -> None:
+        """Every topic's byte garbage, each followed by the probes of the nodes behind it."""
+        for tg, pub, garbage, entry in self._garbage:
+            if rospy.is_shutdown() or not any(report.nodes[n]["alive"] for n in tg.nodes):
+                continue
+            self._sink.current = tg.name
+            entry["sent"] += self._send_cases(tg, report, pub, garbage)
+            entry["labels"] += [c.label for c in garbage]
+            self._probe(tg.nodes, report, f"{tg.name}: byte garbage")
+        self._garbage = []
+
+    def _send_cases(self, tg: G.Target, report: FuzzReport, pub: rospy.Publisher, cases: list[FuzzCase]) -> int:
+        """Publish ``cases`` at the fuzz rate, liveness checked every C.CHECK_EVERY and after the last."""
         sent = 0
         for case in cases:
             if rospy.is_shutdown():
@@ -375,16 +404,10 @@ class GraphFuzzer:
             time.sleep(self.period)
             if sent % C.CHECK_EVERY == 0:
                 self._check(tg, report, _window_label(cases, sent))
-        time.sleep(C.SETTLE_S)
-        self._check(tg, report, _window_label(cases, sent) + " (found after the last case)")
-        labels = [c.label for c in cases]
-        self._check_no_code_ran(tg, report, labels)
-        if self.stress and not rospy.is_shutdown() and any(report.nodes[n]["alive"] for n in tg.nodes):
-            self._report = report
-            n_stress, stress_labels = self._send_stress(tg, cls, pub)
-            sent += n_stress
-            labels += stress_labels
-        report.add_input(tg.kind, tg.name, tg.type, tg.nodes, sent, connected=connected, labels=labels)
+        if cases:
+            time.sleep(C.SETTLE_S)
+            self._check(tg, report, _window_label(cases, sent) + " (found after the last case)")
+        return sent
 
     def _fuzz_service(self, tg: G.Target, report: FuzzReport) -> None:
         try:

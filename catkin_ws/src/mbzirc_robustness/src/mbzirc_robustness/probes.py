@@ -73,12 +73,13 @@ def fill(cls: type, text: str) -> Any:
 
 
 class RosBus:
-    """The probes' access to the live graph (rospy): one subscriber per output, one publisher per topic."""
+    """The probes' access to the live graph: one subscriber per output (rospy, in this process); stimuli
+    go out through a sender process of their own (probe_sender.py says why)."""
 
     def __init__(self) -> None:
         import rospy
         self.rospy = rospy
-        self.pubs: dict[str, Any] = {}
+        self.sender: Any = None
 
     def subscribe(self, topic: str, callback: Callable[[Callable[[], str]], None]) -> None:
         """Calls ``callback(text)`` per message, ``text()`` giving the message as YAML text (decoded only
@@ -90,13 +91,27 @@ class RosBus:
         self.rospy.Subscriber(topic, AnyMsg, on_msg, queue_size=10)
 
     def publish(self, topic: str, msg: Any) -> None:
-        pub = self.pubs.get(topic)
-        if pub is None:
-            pub = self.pubs[topic] = self.rospy.Publisher(topic, type(msg), queue_size=10)
-            deadline = time.monotonic() + 2.0             # a new publisher: let the node connect first
-            while pub.get_num_connections() == 0 and time.monotonic() < deadline:
-                time.sleep(POLL_S)
-        pub.publish(msg)
+        import base64
+        import json
+        import subprocess
+        import sys
+        from mbzirc_robustness.fuzz import serialize
+        if self.sender is None or self.sender.poll() is not None:
+            self.sender = subprocess.Popen([sys.executable, "-m", "mbzirc_robustness.probe_sender"],
+                                           stdin=subprocess.PIPE, text=True)
+            self.rospy.on_shutdown(self.close)
+        line = json.dumps({"topic": topic, "type": msg._type,
+                           "payload": base64.b64encode(serialize(msg)).decode("ascii")})
+        self.sender.stdin.write(line + "\n")
+        self.sender.stdin.flush()
+
+    def close(self) -> None:
+        if self.sender is not None and self.sender.poll() is None:
+            self.sender.stdin.close()
+            try:
+                self.sender.wait(5.0)
+            except Exception:  # noqa: BLE001 - it must not outlive us
+                self.sender.kill()
 
     def stamp(self) -> Any:
         return self.rospy.Time.now()
