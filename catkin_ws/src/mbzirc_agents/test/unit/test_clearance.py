@@ -49,10 +49,10 @@ def test_the_estimate_is_smoothed_and_restarts_after_a_gap(guard):
 def test_set_points_keep_the_clearance_above_the_true_surface(guard):
     guard.on_reading(0.75, 10.0, (*A4_STANDOFF, 1.55))    # e = +0.8: a set-point at 0.75 is 0.05 m underground
     z = guard.safe_set_point_z(*A4_STANDOFF, 0.75, 10.1)
-    assert z - guard.error == pytest.approx(0.5 + 0.1)     # true height: the clearance and the hysteresis
+    assert z - guard.error == pytest.approx(0.5 + 0.2)     # true height: the clearance and the hysteresis
     assert guard.safe_set_point_z(*A4_STANDOFF, 3.0, 10.1) == 3.0     # high enough: unchanged
     guard.on_reading(1.5, 13.0, (*EXT_ROOF, 6.0))          # over the roof, e = 0
-    assert guard.safe_set_point_z(*EXT_ROOF, 4.7, 13.05) == pytest.approx(4.5 + 0.6)
+    assert guard.safe_set_point_z(*EXT_ROOF, 4.7, 13.05) == pytest.approx(4.5 + 0.7)
     assert guard.safe_set_point_z(*EXT_ROOF, 6.0, 13.05) == 6.0
 
 
@@ -87,10 +87,10 @@ def test_a_jump_of_the_fix_is_believed_at_once(guard):
 
 @pytest.mark.parametrize('height, vz, expected', [
     (2.0, -0.5, -0.5),              # far above the bound: as commanded
-    (0.9, -0.5, -0.3),              # 0.3 m above it: at most 0.3 m/s down (reach it in 1 s, not sooner)
-    (0.6, -0.5, 0.0),               # at the bound: no lower
-    (0.3, 0.0, 0.3),                # below it: climb back
-    (0.3, 0.8, 0.8),                # climbing faster anyway
+    (1.0, -0.5, -0.3),              # 0.3 m above the bound (0.5 + 0.2): at most 0.3 m/s down (in 1 s)
+    (0.7, -0.5, 0.0),               # at the bound: no lower
+    (0.4, 0.0, 0.3),                # below it: climb back
+    (0.4, 0.8, 0.8),                # climbing faster anyway
 ])
 def test_velocities_never_take_the_height_below_the_bound(guard, height, vz, expected):
     guard.on_reading(height, 10.0, (0.0, 0.0, height + 0.4))
