@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """rostest on the one-wall world: sensor messages (shapes, frames, encodings), laser range to the wall,
-thermal sees the active fire and not the inactive holder, water on the wall does not count and on the hole
-extinguishes, a blanket off target does not count, flying into the wall crashes, bad fault requests fail."""
+altimeter, thermal sees the active fire and not the inactive holder, water on the wall does not count and
+on the hole extinguishes, a blanket off target does not count, flying into the wall crashes, bad fault
+requests fail."""
 import math
 import time
 import unittest
@@ -10,7 +11,7 @@ import numpy as np
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped
-from sensor_msgs.msg import CameraInfo, Image, LaserScan
+from sensor_msgs.msg import CameraInfo, Image, LaserScan, Range
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from uav_abstraction_layer.msg import State
@@ -66,6 +67,16 @@ class TestEffects(unittest.TestCase):
         img = msg("/mbzirc2020_2/teraranger_evo_thermal/rgb_image", Image)
         self.assertEqual((img.height, img.width, img.encoding), (32, 32, "rgb8"))
         self.assertEqual(len(img.data), 32 * 32 * 3)
+
+    def test_1b_altimeter(self):
+        """UAV 2 hovers 3 m up (ideal world: exact); the landed UAV 3 reads below the minimum range."""
+        self.go2(wp(WALL_X - 3.2, 2.0, 3.0), True)
+        m = msg("/mbzirc2020_2/altimeter", Range)
+        self.assertEqual(m.header.frame_id, "mbzirc2020_2/altimeter_link")
+        self.assertEqual(m.radiation_type, Range.INFRARED)
+        self.assertAlmostEqual(m.range, 3.0, delta=0.01)
+        self.assertTrue(m.min_range < 0.1 and m.max_range >= 20.0)
+        self.assertEqual(msg("/mbzirc2020_3/altimeter", Range).range, -math.inf)
 
     def test_2_thermal_inactive_holder_is_cold(self):
         self.go2(wp(WALL_X - 3.2, -2.0, 3.0), True)
