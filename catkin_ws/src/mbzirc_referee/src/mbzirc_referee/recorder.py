@@ -31,6 +31,15 @@ except ImportError:  # pragma: no cover - depends on the workspace
 SCORE_CLOCK_SLACK_S = 10.0   # s: a /sim/score may be computed at a clock a little ahead of ours
 
 
+def status_shape_ok(status: Any) -> bool:
+    """The central unit's status as the progress line reads it: {agents: {id: {...}}, fires: [...]}."""
+    if not isinstance(status, dict):
+        return False
+    agents, fires = status.get("agents", {}), status.get("fires", [])
+    return isinstance(agents, dict) and all(isinstance(a, dict) for a in agents.values()) \
+        and isinstance(fires, list)
+
+
 class MissionRecorder:
     """Keeps a `MissionRecord` up to date and closes the trial; see the package README for params."""
 
@@ -82,9 +91,16 @@ class MissionRecorder:
 
     def _on_status(self, msg: String) -> None:
         try:
-            self.status = json.loads(msg.data)
+            status = json.loads(msg.data)
         except ValueError:
             rospy.logerr_throttle(10.0, "mission_recorder: /central_unit/status is not JSON")
+            return
+        if not status_shape_ok(status):
+            # the progress line reads it every second: a wrong shape would raise there each time
+            rospy.logerr_throttle(10.0, "mission_recorder: /central_unit/status is not an object with an "
+                                  "'agents' object of objects and a 'fires' list: ignored")
+            return
+        self.status = status
 
     def _on_fires(self, msg: Any) -> None:
         with self.lock:

@@ -36,3 +36,17 @@ def test_a_score_the_clock_cannot_have_reached_or_non_finite_is_refused(rec, ela
 def test_a_valid_score_is_recorded(rec):
     rec._on_score(score(95.0, 1.5))
     assert not rec.errors and rec.rec.elapsed == 95.0 and rec.rec.score == 1.5
+
+
+@pytest.mark.parametrize("text", ["1", "[]", '{"agents": 3}', '{"agents": {"1": 2}}', '{"fires": 5}', "no json"])
+def test_a_status_of_the_wrong_shape_is_refused_and_the_progress_line_still_works(rec, text):
+    rec.status = {"agents": {"1": {"doing": "search"}}, "fires": []}
+    rec._on_status(SimpleNamespace(data=text))
+    assert rec.errors
+    assert "1:search" in rec.progress_line()
+
+
+def test_a_valid_status_is_shown(rec):
+    rec.status = {}
+    rec._on_status(SimpleNamespace(data='{"agents": {"2": {"doing": "go_to"}}, "fires": [1]}'))
+    assert not rec.errors and "2:go_to" in rec.progress_line() and "found 1" in rec.progress_line()
