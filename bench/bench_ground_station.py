@@ -199,7 +199,9 @@ def rss_kb(pids):
 
 def many_pages(args, tmp):
     """args.pages event-stream clients + one Chromium page on one running trial, for args.watch seconds."""
-    long_enough = argparse.Namespace(**dict(vars(args), duration=int(max(args.duration, (args.watch + 30) * args.rtf))))
+    # the trial outlasts the 20 s start-up wait, the watch and Chromium's start (a run at 30 s of margin ended
+    # before the last memory sample)
+    long_enough = argparse.Namespace(**dict(vars(args), duration=int(max(args.duration, (args.watch + 60) * args.rtf))))
     mission = Mission(long_enough, True, os.path.join(tmp, "pages"))
     if not mission.got_port.wait(120):
         raise RuntimeError("the ground station never printed its address")
@@ -223,7 +225,8 @@ def many_pages(args, tmp):
             lag = None
         if lag is not None:
             page_lags.append(lag)
-        rss.append(rss_kb(mission.sampler.station))
+        if mission.proc.poll() is None:      # once the trial has ended the node is gone (0 kB): not a sample
+            rss.append(rss_kb(mission.sampler.station))
     stop.set()
     close_browser(browser)
     mission.proc.terminate()
