@@ -92,7 +92,8 @@ class LaserScene:
 
     def ranges(self):
         z = float(self.ual.pos[2]) + self.laser_z - self.z_shift
-        boxes = self.boxes if self.boxes is not None else wall_boxes(z, self.shift)
+        boxes = (wall_boxes(z, self.shift) if self.boxes is None else
+                 self.boxes(z) if callable(self.boxes) else self.boxes)
         if self.noisy:
             return cast(self.ual.pos[:2], self.ual.yaw, boxes, 0.01, 0.01, 0.02, self.rng)
         return cast(self.ual.pos[:2], self.ual.yaw, boxes)

@@ -193,14 +193,16 @@ def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):
     (22.7, 14.5) to the viewpoint (15.7, 8.5) met the interior wall (x 17.7-17.9) 0.3 m inside its doorway's
     edge at a 40 degree slant, and the UAV hit the frame. Here the doorway is truly at y 10.4-12.4: the UAV
     passes it square to the wall, centred by the laser, at the viewpoint's height 6.5 (it came in at the
-    window's, 7.5: above the doorway's lintel), then goes on to the viewpoint."""
+    window's, 7.5: above the doorway's lintel, where its laser sees a wall), then goes on to the viewpoint."""
     agent, ual, be, scene = uav
     ual.pos = np.array([22.7, 14.5, 7.5])                   # in at the window's height
     ual.yaw = math.pi
     be.clock.sleep(3.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
     scene.shift = (0.0, 0.0)
-    scene.boxes = wall_boxes(6.6) + [(17.7, 6.9, 17.9, 10.4), (17.7, 12.4, 17.9, 19.3)]
+    doorway_closed = [(17.7, 10.4, 17.9, 12.4)]               # above its lintel, 7.2 m up
+    scene.boxes = lambda z: (wall_boxes(z) + [(17.7, 6.9, 17.9, 10.4), (17.7, 12.4, 17.9, 19.3)]
+                             + (doorway_closed if z > 7.2 else []))
     track = Track(be, ual, (17.7, 17.9), UAV_R, 11.0, axis=0)
     s = be.servers['search_indoor_action']
     s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 8.5, 6.5, math.pi)]))
