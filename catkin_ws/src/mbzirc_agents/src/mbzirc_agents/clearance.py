@@ -124,6 +124,7 @@ class ClearanceGuard:
             a = 1.0 - math.exp(-dt / self.cfg.filter_tau) if self.cfg.filter_tau > 0 else 1.0
             self.error += a * (e - self.error)
         self.surface, self.valid_time, self._last = surface, stamp, (h, z)
+        self.last_problem = 'none since (no reading arrived)'
 
     # ---- state ---------------------------------------------------------------------------------------------
     def fresh(self, now: float) -> bool:

@@ -65,6 +65,8 @@ def test_without_a_fresh_reading_the_bound_takes_the_fallback_margin(guard):
     assert guard.problem(12.0).startswith('no valid altimeter reading for 2.0 s')
     assert 'NaN' in guard.problem(12.0)
     assert guard.safe_set_point_z(*A4_STANDOFF, 0.75, 12.0) == pytest.approx(1.5)
+    guard.on_reading(0.75, 12.5, (*A4_STANDOFF, 0.75))      # valid again, then silent
+    assert 'no reading arrived' in guard.problem(14.5)        # not the NaN of before
 
 
 def test_a_reading_no_surface_explains_is_not_believed(guard):
