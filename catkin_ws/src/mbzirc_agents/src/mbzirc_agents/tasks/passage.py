@@ -35,6 +35,7 @@ VERTICAL_TOLERANCE = 0.15                   # m off a window's middle height tha
 # Interior doorways are not in the arena model (a team does not know the interior): any opening of
 # DOORWAY_WIDTH +- DOORWAY_TOLERANCE m in a wall across an indoor leg is passed as a door.
 DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
+WALL_PASSED = 0.5          # m beyond the wall's face (its thickness and more) where an opening is passed
 DOORWAY_MISS = 1.0         # m: a leg meeting the wall this far beside a doorway is meant for it (GNSS error)
 
 
@@ -312,12 +313,17 @@ class LaserPassage:
         dt = 1.0 / C.CONTROL_RATE_HZ
         timeout = length / max(0.1, ctl.speed) + a.p.opening_timeout
         t0 = a.backend.now()
+        # past the wall (its distance when centred, and its thickness) the opening is behind: openings seen
+        # then are in walls beyond (across the room: a window behind a doorway), never this one
+        p0 = a.position()
+        wall_end = (self._last[0].distance if self._last is not None else 0.0) + WALL_PASSED
         while True:
             task.check_preempt()
             p = a.position()
             done = float(np.dot(p[:3] - start[:3], u))
             if done >= length:
                 return
+            passed = float(np.dot(p[:3] - p0[:3], u)) > wall_end
             if a.backend.now() - t0 > timeout:
                 raise TaskError(f'not through the {kind} after {timeout:.0f} s ({length - done:.1f} m left): '
                                 'holding')
@@ -327,7 +333,7 @@ class LaserPassage:
                 task.feedback('HOLDING', f'in the {kind}: no usable scan')
                 a.backend.sleep(dt)
                 continue
-            seen = self._see(msg, width, expected)
+            seen = None if passed else self._see(msg, width, expected)
             if seen is not None and self._last is not None \
                     and seen.distance > self._last[0].distance + a.p.opening_jump_max:
                 seen = None          # an opening in a wall beyond (across the room), not the one passed
@@ -335,7 +341,7 @@ class LaserPassage:
             if seen is not None:
                 self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
                 lateral = expected = seen.lateral
-            else:
+            elif not passed:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     lateral = 0.5 * (left - right)        # its edges beside the robot: keep to the middle
