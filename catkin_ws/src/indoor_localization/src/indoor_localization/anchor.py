@@ -42,6 +42,11 @@ class Params:
     max_speed: float = 3.0         # m/s: a SLAM step faster than this (+ jump_margin) is a jump
     max_yaw_rate: float = 4.0      # rad/s: likewise for the heading (+ 0.3 rad)
     jump_margin: float = 0.3       # m
+    # indoors, the anchored SLAM pose is checked against the UAL's own estimate, which dead-reckons without
+    # GNSS: good over a second (its drift is a few cm per second), and its heading is the compass's
+    max_heading_disagreement: float = 0.15    # rad between the anchored SLAM heading and the UAL's
+    max_motion_disagreement: float = 0.3      # m between their displacements over `motion_window`
+    motion_window: float = 1.0                # s
 
 
 @dataclass(frozen=True)
@@ -128,6 +133,7 @@ class IndoorPose:
         self.lost_at: Optional[float] = None  # when the fix was lost (None: it is valid)
         self.jumped = False                   # the SLAM pose jumped since the fix was lost
         self.last_slam: Optional[tuple] = None  # (t, x, y, yaw) in the map frame
+        self.indoor_track: deque = deque()   # (t, anchored x, y, reported x, y) while the fix is lost
         self.events: list[str] = []           # what a node should log (taken by pop_events)
 
     # ---------------------------------------------------------------- inputs
@@ -149,6 +155,7 @@ class IndoorPose:
             if len(self.pairs) >= self.p.min_pairs:
                 self._fit()
             self.jumped = False
+            self.indoor_track.clear()
             a = self.anchor
             self.events.append("GNSS lost: " + (
                 f"anchor frozen (theta {a.theta:.3f} rad, t ({a.tx:.2f}, {a.ty:.2f}) m, fit rms {a.residual:.3f} m "
@@ -180,6 +187,8 @@ class IndoorPose:
         if self.anchor is None:
             return None
         ax, ay, ayaw = self.anchor.apply(x, y, yaw)
+        if not self.gnss_valid and rep is not None and not self.jumped:
+            self._check_against_dead_reckoning(t, ax, ay, ayaw, rep)
         if rep is not None:
             z = rep[2]
         else:
@@ -204,6 +213,27 @@ class IndoorPose:
     def _fit(self) -> None:
         a = np.array(self.pairs, dtype=float)
         self.anchor = fit_anchor(a[:, 1:4], a[:, 4:7])
+
+    def _check_against_dead_reckoning(self, t: float, ax: float, ay: float, ayaw: float, rep: tuple) -> None:
+        """A SLAM pose that slides off in small steps (a mismatch after a doorway) passes the jump test;
+        the UAL's heading and its displacement over the last second catch it. Sets `jumped`."""
+        p = self.p
+        dyaw = wrap(ayaw - rep[3])
+        if abs(dyaw) > p.max_heading_disagreement:
+            self.jumped = True
+            self.events.append(f"SLAM pose jumped at t={t:.2f} s: its heading is {dyaw:+.2f} rad off the UAL's")
+            return
+        track = self.indoor_track
+        track.append((t, ax, ay, rep[0], rep[1]))
+        while len(track) > 1 and track[1][0] <= t - p.motion_window:
+            track.popleft()
+        t0, ax0, ay0, rx0, ry0 = track[0]
+        if t - t0 >= 0.5 * p.motion_window:
+            off = math.hypot((ax - ax0) - (rep[0] - rx0), (ay - ay0) - (rep[1] - ry0))
+            if off > p.max_motion_disagreement:
+                self.jumped = True
+                self.events.append(f"SLAM pose jumped at t={t:.2f} s: it moved {off:.2f} m otherwise than the "
+                                   f"UAL's dead reckoning in {t - t0:.1f} s")
 
     def _is_jump(self, t: float, x: float, y: float, yaw: float) -> bool:
         if self.last_slam is None:

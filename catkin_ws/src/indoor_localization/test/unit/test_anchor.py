@@ -147,3 +147,26 @@ def test_bad_input_is_ignored_with_a_message():
     assert core.reported.latest() is None
     assert core.on_slam(0.0, 0.0, float("inf"), 0.0) is None
     assert all(e.startswith("ignoring") for e in core.pop_events())
+
+
+@pytest.mark.parametrize("slide", [(0.25, 0.0), (0.0, 0.05)])
+def test_a_slam_pose_sliding_off_in_small_steps_indoors_is_caught(slide):
+    """Steps below the jump test (0.25 m or 0.05 rad per SLAM pose, 8 of them) after a doorway: the UAL's
+    dead-reckoned displacement and its compass heading disagree, and the source is none."""
+    core = IndoorPose()
+    out, k = [], 0
+    for i in range(int(30 * 30)):
+        t = i / 30.0
+        x, y, yaw = truth(t)
+        if t >= 10.0 and core.gnss_valid:
+            core.on_gnss(t, False)
+        core.on_reported(t, x + 0.01 * max(0.0, t - 10.0), y, 7.5, yaw)    # dead reckoning: 1 cm/s drift
+        if i % 2 == 0:
+            mx, my, myaw = to_map(x, y, yaw)
+            if t >= 20.0:
+                k = min(k + 1, 8)
+            mx, my, myaw = mx + k * slide[0], my, myaw + k * slide[1]
+            out.append((t, core.on_slam(t, mx, my, myaw)))
+    assert all(o.source == SLAM for t, o in out if 10.5 < t < 20.0)      # the drift alone is no alarm
+    assert out[-1][1].source == NONE
+    assert any("UAL" in e for e in core.pop_events())
