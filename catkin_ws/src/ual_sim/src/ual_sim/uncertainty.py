@@ -357,10 +357,15 @@ class TrialUncertainty:
     def __init__(self, cfg: UncertaintyConfig, seed: int, robot_ids: Sequence[int], n_fires: int,
                  bmin: np.ndarray, bmax: np.ndarray, box_temp: np.ndarray, buildings: Sequence[str]):
         self.cfg = cfg
-        self.rng = np.random.default_rng([int(seed), 17])     # never the simulation's own generator
+        # One generator per model, never the simulation's own: a seed then gives the same GNSS error paths
+        # whatever else draws (with one shared generator, the laser's draws, which depend on who subscribes
+        # and when, changed every robot's GNSS path from run to run of the same seed).
+        self.rng = np.random.default_rng([int(seed), 17])     # the seed's physical unknowns, drawn once
         self.unknowns = draw_unknowns(cfg.physics, self.rng, n_fires, list(robot_ids), bmin, bmax, box_temp,
                                       buildings)
-        self.gnss = {rid: GnssError(cfg.gnss, self.rng) for rid in robot_ids} if cfg.gnss.enabled else {}
+        self.laser_rng = np.random.default_rng([int(seed), 18])
+        self.gnss = ({rid: GnssError(cfg.gnss, np.random.default_rng([int(seed), 19, int(rid)]))
+                      for rid in robot_ids} if cfg.gnss.enabled else {})
         self.buildings = building_volumes(bmin, bmax, buildings)
 
     def step_gnss(self, dt: float, motion: Optional[Mapping[int, tuple]] = None) -> dict:
@@ -392,7 +397,7 @@ class TrialUncertainty:
     def scan(self, ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
         if not self.cfg.laser.enabled:
             return ranges
-        return corrupt_scan(ranges, self.cfg.laser, self.rng, range_min, range_max)
+        return corrupt_scan(ranges, self.cfg.laser, self.laser_rng, range_min, range_max)
 
 
 __all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "building_volumes",
