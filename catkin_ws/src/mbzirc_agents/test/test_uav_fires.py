@@ -44,7 +44,13 @@ class TestUavFires(unittest.TestCase):
         time.sleep(1.0)
         after = self.fire(active.id)
         self.assertGreater(after.litres_received - before, 0.5, f'container got {after.litres_received} L')
-        self.assertEqual(res.extinguished, after.extinguished)
+        # never "out" when it is not; "not out yet" for a fire that is out is allowed (the tank may run dry
+        # before the thermal camera's cold answers confirm it, more so on a busy CPU: the central unit then
+        # sends a top-up, which finds it cold), but only as the dry-tank verdict
+        if res.extinguished:
+            self.assertTrue(after.extinguished, res.message)
+        elif after.extinguished:
+            self.assertIn('dry', res.message)
         self.assertLess(res.water_left, 1.5)
         # the tank is partly empty: home, land, reset
         state, res = run(2, 'go_home_and_refill', 'GoHomeAndRefill', 150)
