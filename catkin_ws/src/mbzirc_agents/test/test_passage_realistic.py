@@ -153,7 +153,9 @@ class TestPassageRealistic(unittest.TestCase):
         self.trace[UAV].clear()
         state, res = run(UAV, 'enter_building', 'EnterBuilding', 200, floor=1, entry=pose(x + 2.0, y, z, math.pi))
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
-        for path in ([pose(15.7, 8.5, 6.5, math.pi)], [pose(x - 1.5, y, z, 0.0)], [pose(x + 2.0, y, z, 0.0)]):
+        # back to 2.5 m inside the window, not the central unit's 1.5 m (1.3 m off the wall's inner face: with
+        # 0.7 m of GNSS error and the UAV's 0.35 m, the straight move there after the doorway hit facade D)
+        for path in ([pose(15.7, 8.5, 6.5, math.pi)], [pose(x - 2.5, y, z, 0.0)], [pose(x + 2.0, y, z, 0.0)]):
             state, res = run(UAV, 'search_indoor', 'SearchIndoor', 200, floor=1, path=path)
             self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
             self.assertEqual(self.crashed, [])
