@@ -7,7 +7,7 @@ and result is read without a list of action types here.
 from __future__ import annotations
 
 import threading
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import roslib.message
 import rospy
@@ -22,9 +22,11 @@ __all__ = ["TopicWatcher", "CommandRunner"]
 class TopicWatcher:
     """Subscribes every published topic that the state reads, as it appears."""
 
-    def __init__(self, live: LiveSource, period: float = 2.0) -> None:
+    def __init__(self, live: LiveSource, period: float = 2.0,
+                 on_topics: Optional[Callable[[list], None]] = None) -> None:
         self.live = live
         self.period = period
+        self.on_topics = on_topics   # also given every topic list (the SLAM maps' own subscriber)
         self.subs: dict[str, Any] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="gcs_discovery", daemon=True)
@@ -43,6 +45,8 @@ class TopicWatcher:
         except Exception as ex:  # noqa: BLE001 - master gone: try again later
             rospy.logwarn_throttle(30, "ground station: cannot list topics: %s" % ex)
             return
+        if self.on_topics is not None:
+            self.on_topics(topics)
         for name, type_name in topics:
             if name in self.subs or route(name) is None:
                 continue

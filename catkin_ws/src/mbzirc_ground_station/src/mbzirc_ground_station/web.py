@@ -21,6 +21,7 @@ from urllib.parse import parse_qs, urlparse
 
 from mbzirc_ros_utils.local_http import JsonRequestHandler, SameSitePolicy
 
+from .floor_maps import FloorMaps
 from .recordings import RecordingError, Recordings
 
 __all__ = ["FrameSource", "GroundStationServer", "PAGE_PATH"]
@@ -97,7 +98,9 @@ class GroundStationServer:
     def __init__(self, source: Optional[FrameSource], info: dict,
                  command: Optional[Callable[[dict], tuple[int, dict]]] = None, host: str = "127.0.0.1",
                  port: int = 8088, allowed_extra: tuple = (), rate: float = 10.0, max_clients: int = 50,
-                 recordings: Optional[Recordings] = None, open_replay: Optional[OpenReplay] = None) -> None:
+                 recordings: Optional[Recordings] = None, open_replay: Optional[OpenReplay] = None,
+                 maps: Optional[FloorMaps] = None) -> None:
+        self.maps = maps   # the SLAM floor maps (live only), fetched by the page apart from the frames
         self.main = _Channel(source, dict(info, recordings=recordings is not None and open_replay is not None))
         self.command = command
         self.recordings = recordings if open_replay is not None else None
@@ -239,6 +242,8 @@ class GroundStationServer:
                         self.send_json(404, {"error": "this ground station offers no recordings"})
                     else:
                         self.send_json(200, server._recordings_list())
+                elif url.path == "/api/maps":
+                    self._maps(parse_qs(url.query).get("since", [""])[0], bag)
                 elif url.path in ("/api/state", "/api/info", "/api/events"):
                     ch = self._channel(bag)
                     if ch is None:
@@ -253,6 +258,13 @@ class GroundStationServer:
                         self.send_body(200, ch.build(True), "application/json")
                 else:
                     self.send_json(404, {"error": "not found"})
+
+            def _maps(self, since: str, bag: str) -> None:
+                """The maps, or only their version when the page has it (?since=<version>); none in replay."""
+                if server.maps is None or bag:
+                    self.send_json(200, {"version": 0, "maps": []})
+                    return
+                self.send_json(200, server.maps.snapshot(int(since) if since.isdigit() else None))
 
             def do_POST(self) -> None:  # noqa: N802
                 if self.refused():
