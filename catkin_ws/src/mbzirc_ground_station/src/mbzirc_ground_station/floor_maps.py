@@ -76,14 +76,16 @@ class FloorMaps:
         self._lock = threading.Lock()
 
     def admit(self, robot: str, now: float) -> bool:
-        """Whether a map of `robot` received now is looked at (the rate limit, checked before any work).
-        A clock that went back (a new trial) forgets every map first."""
+        """Whether a map of `robot` received now is looked at: at most one every min_period, malformed
+        ones included (checked before any work). A clock that went back (a new trial) forgets every map."""
         with self._lock:
             last = self._accepted_at.get(robot)
-        if last is not None and now < last:
-            self.clear()
+            if last is not None and now < last:
+                self._forget()
+            elif last is not None and now - last < self.min_period:
+                return False
+            self._accepted_at[robot] = now
             return True
-        return last is None or now - last >= self.min_period
 
     def update(self, robot: str, grid: dict, origin_in_arena: tuple, floor: Optional[int], frame: str,
                now: float) -> bool:
@@ -95,7 +97,6 @@ class FloorMaps:
         entry = dict(grid, robot=robot, origin=pose, floor=floor, frame=frame)
         digest = hashlib.sha1(repr(sorted((k, v) for k, v in entry.items())).encode("utf-8")).hexdigest()
         with self._lock:
-            self._accepted_at[robot] = now
             old = self._maps.get(robot)
             if old is not None and old["digest"] == digest:
                 return False
@@ -115,7 +116,11 @@ class FloorMaps:
     def clear(self) -> None:
         """Forget every map (a new trial)."""
         with self._lock:
-            if self._maps:
-                self._maps.clear()
-                self._accepted_at.clear()
-                self.version += 1
+            self._forget()
+
+    def _forget(self) -> None:
+        """clear() with the lock held."""
+        self._accepted_at.clear()
+        if self._maps:
+            self._maps.clear()
+            self.version += 1

@@ -7,6 +7,7 @@ hector_mapping), so a trial without indoor SLAM costs nothing; the TF listener i
 from __future__ import annotations
 
 import re
+import threading
 import time
 from typing import Any, Callable, Optional
 
@@ -76,6 +77,7 @@ class MapListener:
         self.arena_frame = arena_frame.strip("/")
         self.make_lookup = make_lookup
         self.lookup: Optional[Lookup] = None
+        self._lookup_lock = threading.Lock()   # the grids' callbacks run in one thread per topic
         self.clock = clock
         self.subs: dict[str, Any] = {}
         self.log = log or (lambda level, text: (rospy.logerr if level == "error" else rospy.logwarn)(text))
@@ -104,8 +106,9 @@ class MapListener:
     def _anchor(self, frame: str) -> Optional[tuple]:
         if frame == self.arena_frame:
             return (0.0, 0.0, 0.0)
-        if self.lookup is None:
-            self.lookup = self.make_lookup()
+        with self._lookup_lock:
+            if self.lookup is None:
+                self.lookup = self.make_lookup()
         return self.lookup(self.arena_frame, frame)
 
     def _floor(self, robot: str) -> Optional[int]:
