@@ -272,16 +272,16 @@ class LaserPassage:
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
         t0 = a.backend.now()
+        allowed = a.p.opening_timeout            # + the time to slide to an opening first seen far aside
         centred = 0
         while True:
             task.check_preempt()
-            if a.backend.now() - t0 > a.p.opening_timeout:
+            if a.backend.now() - t0 > allowed:
                 why = ('the laser is blind' if self._blind_since is not None else
                        'no scan' if self._fresh_scan() is None else
                        f'no {kind} {width:.1f} m wide centred' if self._last is not None else
                        f'no {kind} {width:.1f} m wide seen')
-                raise TaskError(f'{kind} not found ahead by the laser in {a.p.opening_timeout:.0f} s ({why}): '
-                                'holding')
+                raise TaskError(f'{kind} not found ahead by the laser in {allowed:.0f} s ({why}): holding')
             msg = self._fresh_scan()
             seen = None if msg is None else self._see(msg, width, expected)
             if seen is not None and abs(seen.lateral - expected) > SEARCH_RADIUS and self._last is None:
@@ -294,6 +294,8 @@ class LaserPassage:
                 a.backend.sleep(dt)
                 continue
             self._check_jump(seen, kind, ctl.lateral_vmax)
+            if allowed == a.p.opening_timeout:      # at the first sight: time to slide there, then to centre
+                allowed += 2.0 * abs(seen.lateral) / max(0.1, ctl.lateral_vmax)
             expected = seen.lateral
             yaw_ok = abs(math.remainder(a.position()[3] - heading, 2 * math.pi)) <= a.p.yaw_tolerance
             centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok and z_ok else 0
@@ -321,8 +323,8 @@ class LaserPassage:
             task.check_preempt()
             p = a.position()
             done = float(np.dot(p[:3] - start[:3], u))
-            if done >= length:
-                return
+            if done >= length - a.p.position_tolerance:
+                return                               # there, as a go-to is (seen: 'not through, 0.0 m left')
             passed = float(np.dot(p[:3] - p0[:3], u)) > wall_end
             if a.backend.now() - t0 > timeout:
                 raise TaskError(f'not through the {kind} after {timeout:.0f} s ({length - done:.1f} m left): '
