@@ -98,6 +98,7 @@ class StateDebugger:
                  max_value_chars: int = MAX_VALUE_CHARS, max_total_chars: int = MAX_TOTAL_CHARS,
                  is_shutdown: Callable[[], bool] = lambda: False, extra_status: Optional[dict] = None) -> None:
         self._publish = publish
+        self._publish_lock = threading.Lock()   # status computed and sent as one step (see publish_status)
         self._extra = dict(extra_status or {})  # facts about the server the viewer shows (init_allowed)
         self._exclude = tuple(exclude_keys)
         self._caps = {"value_chars": max_value_chars, "total_chars": max_total_chars}
@@ -242,4 +243,10 @@ class StateDebugger:
         return out
 
     def publish_status(self) -> None:
-        self._publish(json.dumps(self.status()))
+        """Send the status; computing and sending are one step, so the last status sent is the newest.
+
+        Why: two paused children resumed together each publish as they leave; unserialised, the one that
+        computed first (still listing the other as paused) could send last, and the viewer showed a state
+        paused that had run on (a fresh-clone make test: concurrent children still 'paused' after continue)."""
+        with self._publish_lock:
+            self._publish(json.dumps(self.status()))

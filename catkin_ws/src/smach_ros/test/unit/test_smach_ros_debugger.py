@@ -171,3 +171,33 @@ def test_userdata_inspector_caps():
     assert shown == {"a": 1, "c": [1, 2]}
     assert any(n.startswith("big: 102 JSON characters") for n in notes)
     assert any(n.startswith("d: not shown") for n in notes) and "skip: excluded" in notes
+
+
+def test_the_last_status_sent_is_the_newest_when_children_resume_together():
+    """A fresh-clone make test saw concurrent children still 'paused' in the viewer after continue: each
+    resumed child publishes as it leaves, and the one that computed its status first could send it last."""
+    log, sent = [], []
+    first_computed = threading.Event()
+    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
+    with cc:
+        smach.Concurrence.add("X", Recorder("X", log, ("next",)))
+        smach.Concurrence.add("Y", Recorder("Y", log, ("next",)))
+    sm = smach.StateMachine(outcomes=["done"])
+    with sm:
+        smach.StateMachine.add("CC", cc, transitions={"done": "done"})
+    st = Statuses()
+    dbg = StateDebugger(sm, "/R", st.publish, breakpoints=["/R/CC/X", "/R/CC/Y"])
+    dbg.install()
+    t, box = run(sm)
+    st.wait(lambda s: paused_paths(s) == ["/R/CC/X", "/R/CC/Y"])
+
+    def slow_publish(text):             # the first status computed after the continue is sent late
+        if not first_computed.is_set():
+            first_computed.set()
+            threading.Event().wait(0.2)
+        sent.append(json.loads(text))
+    dbg._publish = slow_publish
+    dbg.handle_command(json.dumps({"cmd": "continue"}))
+    t.join(5)
+    assert box["outcome"] == "done" and sorted(log) == ["X", "Y"]
+    assert sent[-1]["paused"] == []
