@@ -154,6 +154,15 @@ def start_agent(agent, backend):
     return agent
 
 
+def stop_agent(agent, ual, backend, *scenes):
+    """The teardown of start_agent: stop the scenes' threads, the backend's clock, the fake UAL, the agent."""
+    for scene in scenes:
+        scene.stop = True
+    backend.shutdown = True
+    ual.stop = True
+    agent.shutdown()
+
+
 def start_uav(backend, params=None, speedup=4.0):
     """A started UavAgent '2' (regions time out after 5 s unless params say otherwise) on a FakeUal, once
     its first pose arrived: the set-up every UAV task test needs. Returns (agent, ual)."""

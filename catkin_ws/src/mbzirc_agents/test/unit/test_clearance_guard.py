@@ -13,7 +13,7 @@ import pytest
 from mbzirc_comm_objs.msg import ExtinguishFacadeFireGoal, GoToGoal, TakeOffGoal
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav
+from fake_ual import start_uav, stop_agent
 from test_facade_safety import Scene, set_fire
 
 A4 = (23.7, 19.5, 0.75)              # facade A's lowest holder, 0.75 m above the ground
@@ -26,12 +26,6 @@ def fly(params=None):
     s.send(TakeOffGoal(height=3.0))
     assert s.wait(10) == 'succeeded'
     return be, agent, ual
-
-
-def stop(be, agent, ual):
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
 
 
 def go_to(be, x, y, z, yaw=0.0, timeout=40):
@@ -62,7 +56,7 @@ def test_a_low_go_to_with_the_fix_reading_high(guard):
         else:
             assert ual.min_flying_z <= 0.0                     # on the ground: ual_sim's crash
     finally:
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)
 
 
 @pytest.mark.parametrize('guard', [True, False])
@@ -83,7 +77,7 @@ def test_a_hold_while_the_gnss_error_wanders(guard):
         else:
             assert ual.min_flying_z <= 0.1 + 1e-6
     finally:
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)
 
 
 def test_velocity_commands_stop_at_the_clearance():
@@ -97,7 +91,7 @@ def test_velocity_commands_stop_at_the_clearance():
         assert ual.min_flying_z >= 0.5
         assert ual.pos[2] < 0.8                                 # but it did come down to the bound (0.7 m)
     finally:
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)
 
 
 def test_a_dead_altimeter_is_reported_and_the_gnss_margin_applies():
@@ -113,7 +107,7 @@ def test_a_dead_altimeter_is_reported_and_the_gnss_margin_applies():
         be.clock.sleep(2.0)
         assert any('altimeter' in e and 'no valid altimeter reading for' in e for e in be.errors[-3:])
     finally:
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)
 
 
 def test_take_off_and_landing_are_the_ual_own():
@@ -129,7 +123,7 @@ def test_take_off_and_landing_are_the_ual_own():
         be.clock.sleep(2.0)
         assert ual.pos[2] == pytest.approx(0.0) and len(ual.waypoints) == n
     finally:
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)
 
 
 @pytest.mark.parametrize('guard', [True, False])
@@ -162,4 +156,4 @@ def test_the_low_facade_fire_a4_is_put_out_off_the_ground(guard):
             assert ual.min_flying_z <= 0.0
     finally:
         sc.stop = True
-        stop(be, agent, ual)
+        stop_agent(agent, ual, be)

@@ -2,7 +2,7 @@
 import pytest
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav
+from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
 
 
@@ -11,9 +11,7 @@ def uav():
     be = FakeBackend()
     agent, ual = start_uav(be, speedup=8.0)
     yield agent, be
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be)
 
 
 def test_unchanged_feed_only_every_idle_period_changed_feed_at_once(uav):

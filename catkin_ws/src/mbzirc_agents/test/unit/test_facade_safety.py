@@ -16,7 +16,7 @@ from mbzirc_comm_objs.srv import CheckFireResponse
 from sensor_msgs.msg import LaserScan
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav
+from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
 from mbzirc_agents.control import HoleCentering, body_to_world, front_distance, world_to_body
 from mbzirc_agents.tasks.sensing import CAM_OFFSET_X, SensedObjects
@@ -98,10 +98,7 @@ def scene():
     sc.statuses = []
     set_fire(be, HOLDER)
     yield agent, ual, be, sc
-    sc.stop = True
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be, sc)
 
 
 def extinguish(be, timeout=30):

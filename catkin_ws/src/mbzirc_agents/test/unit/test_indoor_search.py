@@ -6,7 +6,7 @@ from mbzirc_comm_objs.msg import SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
-from fake_ual import start_ugv
+from fake_ual import start_ugv, stop_agent
 from laser_world import LaserScene
 from mbzirc_agents import constants as C
 
@@ -20,10 +20,7 @@ def ugv_inside():
     ual.follow_velocity = True                   # the way out through the door is laser guided
     scene = LaserScene(be, ual, laser_z=0.9)
     yield agent, ual, be
-    scene.stop = True
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be, scene)
 
 
 def search(be, timeout=400):

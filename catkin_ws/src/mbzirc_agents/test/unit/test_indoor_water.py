@@ -5,7 +5,7 @@ from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList, T
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav
+from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
 
 
@@ -44,9 +44,7 @@ class Scene:
         return s
 
     def close(self):
-        self.be.shutdown = True
-        self.ual.stop = True
-        self.agent.shutdown()
+        stop_agent(self.agent, self.ual, self.be)
 
 
 @pytest.fixture

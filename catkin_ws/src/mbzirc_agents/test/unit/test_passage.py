@@ -12,7 +12,7 @@ from mbzirc_comm_objs.msg import EnterBuildingGoal, SearchIndoorGoal, TakeOffGoa
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav, start_ugv
+from fake_ual import start_uav, start_ugv, stop_agent
 from laser_world import LaserScene, wall_boxes
 from mbzirc_agents import constants as C
 
@@ -63,10 +63,7 @@ def uav():
     assert s.wait(20) == 'succeeded'
     scene = LaserScene(be, ual, shift=(-1.0, 0.0))      # the window truly at x 13.5-15.5
     yield agent, ual, be, scene
-    scene.stop = True
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be, scene)
 
 
 def enter(be, timeout=120):
@@ -147,10 +144,7 @@ def ugv():
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
     scene = LaserScene(be, ual, shift=(0.8, 0.0), laser_z=0.9)
     yield agent, ual, be, scene
-    scene.stop = True
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be, scene)
 
 
 def test_the_ugv_drives_in_and_out_through_a_door_off_its_gnss(ugv):

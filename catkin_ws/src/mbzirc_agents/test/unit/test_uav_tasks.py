@@ -7,7 +7,7 @@ from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import GoToGoal, Object, ObjectList, TakeOffGoal, ExtinguishFacadeFireGoal, LandGoal
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav
+from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
 
 
@@ -16,9 +16,7 @@ def uav():
     be = FakeBackend()
     agent, ual = start_uav(be, speedup=8.0)
     yield agent, ual, be
-    be.shutdown = True
-    ual.stop = True
-    agent.shutdown()
+    stop_agent(agent, ual, be)
 
 
 def pose(x, y, z, yaw=None, frame='arena'):
@@ -299,9 +297,7 @@ def test_respawned_in_the_air_keeps_its_regions_and_takes_the_arena_home():
         arena_home = next(h.position for h in ARENA.homes if h.robot_id == 2)
         assert np.allclose(agent.home, arena_home), 'a first pose mid-air is not home'
     finally:
-        be.shutdown = True
-        ual.stop = True
-        agent.shutdown()
+        stop_agent(agent, ual, be)
 
 
 def test_started_on_the_ground_frees_a_previous_runs_regions_and_is_home():
@@ -311,9 +307,7 @@ def test_started_on_the_ground_frees_a_previous_runs_regions_and_is_home():
         assert ual.regions.owner_at((7, 8, 6)) is None
         assert np.allclose(agent.home, (7.0, 8.0, 0.0))
     finally:
-        be.shutdown = True
-        ual.stop = True
-        agent.shutdown()
+        stop_agent(agent, ual, be)
 
 
 def test_replayed_heartbeats_are_not_believed(uav):
