@@ -54,6 +54,18 @@ def machine(log):
     return sm
 
 
+def concurrence_machine(log):
+    """A machine whose one state CC runs the Recorders X and Y concurrently: (machine, CC)."""
+    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
+    with cc:
+        smach.Concurrence.add("X", Recorder("X", log, ("next",)))
+        smach.Concurrence.add("Y", Recorder("Y", log, ("next",)))
+    sm = smach.StateMachine(outcomes=["done"])
+    with sm:
+        smach.StateMachine.add("CC", cc, transitions={"done": "done"})
+    return sm, cc
+
+
 def run(sm):
     box = {}
     t = threading.Thread(target=lambda: box.setdefault("outcome", sm.execute()), daemon=True)
@@ -112,13 +124,7 @@ def test_pause_command_and_declared_breakpoint():
 
 def test_concurrence_children_pause_together():
     log, st = [], Statuses()
-    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
-    with cc:
-        smach.Concurrence.add("X", Recorder("X", log, ("next",)))
-        smach.Concurrence.add("Y", Recorder("Y", log, ("next",)))
-    sm = smach.StateMachine(outcomes=["done"])
-    with sm:
-        smach.StateMachine.add("CC", cc, transitions={"done": "done"})
+    sm, cc = concurrence_machine(log)
     dbg = StateDebugger(sm, "/R", st.publish, breakpoints=["/R/CC/X", "/R/CC/Y"])
     dbg.install()
     t, box = run(sm)
@@ -178,13 +184,7 @@ def test_the_last_status_sent_is_the_newest_when_children_resume_together():
     resumed child publishes as it leaves, and the one that computed its status first could send it last."""
     log, sent = [], []
     first_computed = threading.Event()
-    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
-    with cc:
-        smach.Concurrence.add("X", Recorder("X", log, ("next",)))
-        smach.Concurrence.add("Y", Recorder("Y", log, ("next",)))
-    sm = smach.StateMachine(outcomes=["done"])
-    with sm:
-        smach.StateMachine.add("CC", cc, transitions={"done": "done"})
+    sm, cc = concurrence_machine(log)
     st = Statuses()
     dbg = StateDebugger(sm, "/R", st.publish, breakpoints=["/R/CC/X", "/R/CC/Y"])
     dbg.install()
