@@ -9,6 +9,8 @@ Python puts the script's own folder, bench/, first on sys.path.
 """
 import json
 import os
+import signal
+import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -22,6 +24,17 @@ def use_sources(*paths: str) -> None:
     """Puts catkin_ws/src/<path> folders first on sys.path, so a benchmark runs on the source tree
     without a catkin build (e.g. "mbzirc_agents/src")."""
     sys.path[:0] = [os.path.join(SRC, p) for p in paths]
+
+
+def stop_launch(launch, timeout: float) -> None:
+    """Ctrl+C a roslaunch started in its own process group (start_new_session) as a user would; its whole
+    group is killed when it has not ended after timeout s (a node ignoring SIGINT must not outlive a bench)."""
+    launch.send_signal(signal.SIGINT)
+    try:
+        launch.wait(timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(launch.pid, signal.SIGKILL)
+        launch.wait()
 
 
 def load_average_1min() -> float:

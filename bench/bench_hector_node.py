@@ -24,7 +24,7 @@ import subprocess
 import sys
 import time
 
-from _common import SRC, load_averages, write_result
+from _common import SRC, load_averages, write_result, stop_launch
 from _node_cpu import process_stat, descendants, node_kind
 
 BAG = os.path.join(SRC, "hector_mapping", "test", "data", "floor1_fast.bag")
@@ -110,12 +110,7 @@ def run_case(replayer: Replayer, port: int, env: dict) -> dict:
         with open(f"/proc/{pid}/status") as f:
             res["threads"] = int(next(line.split()[1] for line in f if line.startswith("Threads:")))
     finally:
-        launch.send_signal(signal.SIGINT)
-        try:
-            launch.wait(20)
-        except subprocess.TimeoutExpired:
-            os.killpg(launch.pid, signal.SIGKILL)
-            launch.wait()
+        stop_launch(launch, 20)
     res["cpu_ms_per_scan"] = round(1e3 * res["cpu_s"] / max(res["answered"], 1), 2)
     return res
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -43,7 +42,7 @@ import threading
 import time
 from collections import deque
 
-from _common import load_averages, write_result
+from _common import load_averages, write_result, stop_launch
 from _node_cpu import KINDS, descendants, node_kind, process_stat
 
 NS = "mbzirc2020_2"
@@ -319,12 +318,7 @@ def main() -> int:
         cpu = {k: process_stat(p)[1] - cpu0[k] for k, p in pids.items()}
         sim_s, wall_s, slam_n = rospy.get_time() - sim0, time.time() - wall0, pilot.slam_poses - slam0
     finally:
-        launch.send_signal(signal.SIGINT)
-        try:
-            launch.wait(30)
-        except subprocess.TimeoutExpired:
-            os.killpg(launch.pid, signal.SIGKILL)
-            launch.wait()
+        stop_launch(launch, 30)
         os.unlink(launch_file)
     rows, losses = pilot.indoor_errors()
     err = [math.hypot(dx, dy) for _, dx, dy, _, _ in rows]
