@@ -181,7 +181,8 @@ class OpeningPassage:
         standoff: m from the wall the robot keeps at least while centring (it backs off when closer: the
             GNSS error may have put it nearer than planned); gain: 1/s; lateral_vmax: m/s sideways (and
             backing off); speed: m/s forward through; tolerance: m off the opening's middle that counts as
-            centred. Through, forward motion stops while the robot is more than twice that off the middle.
+            centred. Through, forward motion stops while the robot is further off the middle than the room
+            the opening leaves it (`through`'s room), and never before twice the tolerance.
     """
     standoff: float = 1.0
     gain: float = 1.0
@@ -198,12 +199,16 @@ class OpeningPassage:
         vx = self.gain * min(0.0, distance - self.standoff)
         return saturate(np.array([vx, self.gain * lateral]), self.lateral_vmax)
 
-    def through(self, lateral: Optional[float]) -> np.ndarray:
-        """Forward at `speed`, sideways onto the middle when it is seen (None: straight on)."""
+    def through(self, lateral: Optional[float], room: Optional[float] = None) -> np.ndarray:
+        """Forward at `speed`, sideways onto the middle when it is seen (None: straight on). Forward only
+        while |lateral| <= max(room, 2 x tolerance): room (m) is how far off its middle the opening lets the
+        robot be (its half width less the distance the robot keeps from returns); a robot swinging a
+        little about the middle of a wide opening still goes on."""
         if lateral is None or not math.isfinite(lateral):
             return np.array([self.speed, 0.0])
         vy = float(np.clip(self.gain * lateral, -self.lateral_vmax, self.lateral_vmax))
-        vx = self.speed if abs(lateral) <= 2.0 * self.tolerance else 0.0
+        allowed = 2.0 * self.tolerance if room is None or not math.isfinite(room) else max(room, 2.0 * self.tolerance)
+        vx = self.speed if abs(lateral) <= allowed else 0.0
         return np.array([vx, vy])
 
 

@@ -59,6 +59,7 @@ class FakeBackend:
         self.pubs = {}
         self.errors = []
         self.infos = []
+        self.warns = []
         self.handlers = {}          # service name -> callable(request) for service_proxy
 
     def subscriber(self, topic, msg_type, cb):
@@ -129,4 +130,4 @@ class FakeBackend:
         self.errors.append(m)
 
     def logwarn(self, m):
-        pass
+        self.warns.append(m)

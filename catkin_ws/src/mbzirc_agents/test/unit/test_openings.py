@@ -141,6 +141,11 @@ def test_passage_control():
     assert v[0] == 0.4 and abs(v[1] - 0.2) < 1e-9
     v = ctl.through(-0.5)                                              # far off the middle: stop, re-centre
     assert v[0] == 0.0 and v[1] == -0.4
+    assert ctl.through(0.3)[0] == 0.0                                  # off more than twice the tolerance
+    assert ctl.through(0.3, room=0.4)[0] == 0.4                        # but within the opening's room
+    assert ctl.through(0.45, room=0.4)[0] == 0.0
+    assert ctl.through(0.2, room=0.1)[0] == 0.4                        # never less than twice the tolerance
+    assert ctl.through(0.2, room=float('nan'))[0] == 0.4
 
 
 def test_a_side_wall_beside_the_robot_is_not_the_wall_ahead():

@@ -133,6 +133,52 @@ def test_a_window_that_jumps_aborts_the_passage(uav):
     assert ual.pos[1] > WALL_Y[1] + UAV_R
 
 
+
+def wind_while_passing(agent, ual, be, scene, velocity, where=lambda pos: True):
+    """A steady wind (m/s, world x y z) that moves the UAV's true position while its passage is PASSING
+    and where(true position): the gusts ual_sim blows near the tower's first floor, where its windows are,
+    held at one value."""
+    w = np.asarray(velocity, float)
+
+    def blow():
+        while not scene.stop:
+            if agent.active_sub_state == 'PASSING' and where(ual.pos):
+                with ual.lock:
+                    ual.pos = ual.pos + w * 0.02
+            be.clock.sleep(0.02)
+    be.clock.start_thread(blow, name='wind')
+
+
+def test_a_crosswind_in_the_window_does_not_stall_the_uav(uav):
+    """Mission seed 16 (ideal world): gusts near the first floor held the UAV about 0.25 m off the window's
+    middle, where forward motion used to stop (more than twice the centring tolerance off): 29 s later it
+    was still in the frame. A wind along the wall holding it 0.3 m off (the controller's steady state): it
+    goes on through, since a 2 m window leaves it 0.4 m (half the width less ~opening_keep_off), and its
+    true track stays inside the window by its radius."""
+    agent, ual, be, scene = uav
+    wind_while_passing(agent, ual, be, scene, (0.3, 0.0, 0.0))
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    true_x = WINDOW_X - 1.0
+    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+
+
+def test_a_passage_with_no_progress_backs_out_the_way_it_came(uav):
+    """A headwind as strong as the passage's speed in the window's frame: no progress for ~opening_timeout
+    s. The UAV backs out to where its way through began (outside the wall, in front of the window) before
+    failing, so that no later leg starts in the frame (seed 16: the next task's first leg took the UAV
+    from the frame into the sill)."""
+    agent, ual, be, scene = uav
+    wind_while_passing(agent, ual, be, scene, (0.0, agent.p.opening_speed, 0.0),     # outwards (+y)
+                       where=lambda pos: pos[1] < WALL_Y[1] + 0.2)
+    s, status = enter(be)
+    assert status == 'aborted' and 'backed out' in s.result.message, s.result.message
+    assert 'no progress' in s.result.message, s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R, f'not out of the wall: {ual.pos}'
+    assert any('backing out' in m for m in be.warns), be.warns
+
+
 @pytest.fixture
 def ugv():
     """The UGV in front of the facade B door; the world 0.8 m east of the arena model (door x 13.8-16.3)."""

@@ -6,10 +6,17 @@ laser before going in (`openings.find_opening`), the robot centres on it sideway
 facing the wall), then goes through with the lateral correction applied while the opening's edges are
 seen (ahead, then beside it: `openings.side_clearances`).
 
+What the laser sees is put in the robot's frame of now, not of the scan: the robot moved since the scan
+was taken (more so on a loaded machine, where the task loop and the scan callback lag): steering on the
+scan's own frame then overshoots, the robot swings across the opening's middle and, forward motion being
+allowed only near the middle, crawls (seen: a window not passed in 29 s).
+
 Safety: the laser blind (every beam NaN) or silent -> the robot holds; an opening not found and centred in
 `~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
 robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
-nearer than `~opening_keep_off` (control.keep_off_return).
+nearer than `~opening_keep_off` (control.keep_off_return); no progress through it for `~opening_timeout`
+s -> the robot backs out the way it came in (to where the passage started) before the TaskError, so
+that no later leg starts inside the wall.
 """
 from __future__ import annotations
 
@@ -36,6 +43,7 @@ VERTICAL_TOLERANCE = 0.15                   # m off a window's middle height tha
 # DOORWAY_WIDTH +- DOORWAY_TOLERANCE m in a wall across an indoor leg is passed as a door.
 DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
 WALL_PASSED = 0.5          # m beyond the wall's face (its thickness and more) where an opening is passed
+PROGRESS_STEP = 0.1        # m along the way through that counts as progress (restarts the stall clock)
 DOORWAY_MISS = 1.0         # m: a leg meeting the wall this far beside a doorway is meant for it (GNSS error)
 
 
@@ -71,7 +79,7 @@ class LaserPassage:
     def __init__(self, task: AgentTask) -> None:
         self.task = task
         self.agent = task.agent
-        self._scan: Optional[Tuple[Any, float]] = None     # (LaserScan, receive time)
+        self._scan: Optional[Tuple[Any, float, np.ndarray]] = None  # (LaserScan, receive time, pose then)
         self._blind_since: Optional[float] = None
         task.iface.add_subscriber(task.name, 'scan', LaserScan, self._on_scan)
 
@@ -89,7 +97,11 @@ class LaserPassage:
             self._blind_since = now if self._blind_since is None else self._blind_since
             return
         self._blind_since = None
-        self._scan = (msg, now)
+        try:
+            pose = self.agent.position(wait=0.0)
+        except TaskError:
+            return                                   # no pose yet: a scan we could not place
+        self._scan = (msg, now, pose)
 
     def height_now(self) -> Optional[float]:
         """The UAV's true height (arena z of base_link): its GNSS height corrected by the vertical GNSS error
@@ -103,14 +115,37 @@ class LaserPassage:
         """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
         if self._blind_since is not None or self._scan is None:
             return None
-        msg, t = self._scan
+        msg, t, _pose = self._scan
         return msg if self.agent.backend.now() - t <= C.SCAN_MAX_AGE else None
 
+    def _moved_since_scan(self, msg: Any) -> Tuple[np.ndarray, float]:
+        """The robot's motion since msg was received, in the body frame it had then: ((dx, dy), dyaw)."""
+        scan = self._scan
+        if scan is None or scan[0] is not msg:
+            return np.zeros(2), 0.0
+        then, now = scan[2], self.agent.position()
+        d = world_to_body((now[0] - then[0], now[1] - then[1], 0.0), then[3])
+        return np.array([d[0], d[1]]), math.remainder(now[3] - then[3], 2 * math.pi)
+
+    def _as_now(self, msg: Any, x: float, y: float) -> Tuple[float, float]:
+        """A point (x, y) of msg's body frame in the robot's body frame now."""
+        (dx, dy), dyaw = self._moved_since_scan(msg)
+        c, s = math.cos(dyaw), math.sin(dyaw)
+        px, py = x - dx, y - dy
+        return c * px + s * py, -s * px + c * py
+
     def _see(self, msg: Any, width: float, expected: float) -> Optional[SeenOpening]:
+        """The opening in msg (body frame of now: _as_now), about `expected` m aside, or None."""
         p = self.agent.p
-        return find_opening(msg.ranges, msg.angle_min, msg.angle_increment, width, expected_lateral=expected,
+        seen = find_opening(msg.ranges, msg.angle_min, msg.angle_increment, width, expected_lateral=expected,
                             tolerance=p.opening_width_tolerance, range_min=msg.range_min,
                             range_max=msg.range_max if msg.range_max > 0 else math.inf)
+        if seen is None:
+            return None
+        distance, lateral = self._as_now(msg, seen.distance, seen.lateral)
+        shift = lateral - seen.lateral
+        return SeenOpening(lateral=lateral, distance=distance, width=seen.width, left=seen.left + shift,
+                           right=seen.right + shift)
 
     # ---- the passage ------------------------------------------------------------------------------
     def kind(self) -> str:
@@ -219,7 +254,11 @@ class LaserPassage:
         try:
             self._last: Optional[Tuple[SeenOpening, float]] = None
             expected = self._centre(kind, heading, width, prior, ctl, height)
-            self._through(kind, heading, width, expected, ctl, start, u, length)
+            way_in = a.position()
+            try:
+                self._through(kind, heading, width, expected, ctl, start, u, length)
+            except TaskError as e:
+                self._back_out(kind, heading, way_in, u, e)
         finally:
             a.hold()
         a.reserve(task, 'hold', hold_box(a, a.position()))
@@ -313,8 +352,10 @@ class LaserPassage:
         """Forward until `length` m along u from start, centred on the opening while its edges are seen."""
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
-        timeout = length / max(0.1, ctl.speed) + a.p.opening_timeout
+        nominal = length / max(0.1, ctl.speed)
+        timeout = 3.0 * nominal + a.p.opening_timeout          # slow progress still ends somewhere
         t0 = a.backend.now()
+        best, best_t = -math.inf, t0                            # progress so far, and when it last grew
         # past the wall (its distance when centred, and its thickness) the opening is behind: openings seen
         # then are in walls beyond (across the room: a window behind a doorway), never this one
         p0 = a.position()
@@ -326,9 +367,12 @@ class LaserPassage:
             if done >= length - a.p.position_tolerance:
                 return                               # there, as a go-to is (seen: 'not through, 0.0 m left')
             passed = float(np.dot(p[:3] - p0[:3], u)) > wall_end
-            if a.backend.now() - t0 > timeout:
-                raise TaskError(f'not through the {kind} after {timeout:.0f} s ({length - done:.1f} m left): '
-                                'holding')
+            now = a.backend.now()
+            if done > best + PROGRESS_STEP:
+                best, best_t = done, now
+            if now - best_t > a.p.opening_timeout or now - t0 > timeout:
+                raise TaskError(f'not through the {kind} after {now - t0:.0f} s ({length - done:.1f} m left, '
+                                f'no progress for {now - best_t:.0f} s)')
             msg = self._fresh_scan()
             if msg is None:
                 self._hold(heading)                  # blind or silent laser: no motion we cannot see
@@ -339,15 +383,48 @@ class LaserPassage:
             if seen is not None and self._last is not None \
                     and seen.distance > self._last[0].distance + a.p.opening_jump_max:
                 seen = None          # an opening in a wall beyond (across the room), not the one passed
-            lateral = None
+            lateral, room = None, None
             if seen is not None:
                 self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
                 lateral = expected = seen.lateral
+                room = seen.width / 2 - a.p.opening_keep_off
             elif not passed:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
-                    lateral = 0.5 * (left - right)        # its edges beside the robot: keep to the middle
+                    # its edges beside the robot: keep to the middle
+                    lateral = self._as_now(msg, 0.0, 0.5 * (left - right))[1]
+                    room = 0.5 * (left + right) - a.p.opening_keep_off
             task.feedback('PASSING', f'through the {kind}: {length - done:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside'))
-            self._command(ctl.through(lateral), heading, msg)
+            self._command(ctl.through(lateral, room), heading, msg)
+            a.backend.sleep(dt)
+
+    def _back_out(self, kind: str, heading: float, way_in: np.ndarray, u: np.ndarray, why: TaskError) -> None:
+        """Back along -u, facing heading, to where the way through began (way_in: centred, outside the wall),
+        kept off laser returns; then the TaskError `why`, saying where the robot is. Without a scan the robot
+        holds where it is (no motion it cannot see)."""
+        a, task = self.agent, self.task
+        dt = 1.0 / C.CONTROL_RATE_HZ
+        depth = float(np.dot(a.position()[:3] - way_in[:3], u))
+        if depth <= a.p.position_tolerance:
+            raise TaskError(f'{why}: holding') from why
+        a.backend.logwarn(f'[{task.name}] {why}: backing out of the {kind} the way it came ({depth:.1f} m)')
+        t0 = a.backend.now()
+        limit = depth / max(0.1, a.p.opening_speed) + a.p.opening_timeout
+        while True:
+            task.check_preempt()
+            p = a.position()
+            left = float(np.dot(p[:3] - way_in[:3], u))
+            if left <= a.p.position_tolerance:
+                raise TaskError(f'{why}: backed out of the {kind}, holding where the passage began') from why
+            if a.backend.now() - t0 > limit:
+                raise TaskError(f'{why}; backing out not done in {limit:.0f} s ({left:.1f} m left): '
+                                'holding') from why
+            msg = self._fresh_scan()
+            if msg is None:
+                self._hold(heading)
+                task.feedback('HOLDING', f'backing out of the {kind}: no usable scan')
+            else:
+                task.feedback('BACKING_OUT', f'out of the {kind} the way it came: {left:.1f} m to go')
+                self._command(np.array([-a.p.opening_speed, 0.0]), heading, msg)
             a.backend.sleep(dt)
