@@ -1,6 +1,6 @@
 """ColdConfirmation: when a water task may stop pumping."""
 from mbzirc_agents import constants as C
-from mbzirc_agents.tasks.cold_check import ColdConfirmation, dry_tank_verdict
+from mbzirc_agents.tasks.cold_check import ColdConfirmation, WaterFlow, dry_tank_verdict
 
 
 def test_cold_needs_hot_first_then_consecutive_colds():
@@ -20,6 +20,29 @@ def test_a_hot_answer_restarts_the_count_and_silence_keeps_it():
     assert not c.update(False) and not c.update(False)
     assert not c.update(None)           # detector silent: no evidence, no change
     assert c.update(False)
+
+
+def test_cold_answers_count_only_with_water_flowing_at_the_fire():
+    """Seen hot, then cold while no water flowed at it (the robot looked away, the pump moved no water): those
+    answers say nothing and end the row; only a full row of watered cold answers is "out"."""
+    c = ColdConfirmation(checks=3)
+    c.update(True)
+    assert not any(c.update(False, watered=False) for _ in range(10))
+    assert not c.update(False) and not c.update(False)
+    assert not c.update(False, watered=False)          # the row starts again
+    assert not c.update(False) and not c.update(False)
+    assert c.update(False)
+
+
+def test_water_flows_while_the_tank_level_drops():
+    f = WaterFlow(now=0.0, window=1.5)
+    assert not f.update(2.0, 0.5)                       # a first reading: nothing to compare with
+    assert f.update(1.9, 1.0)                           # dropped
+    assert f.update(1.9, 2.0)                           # the level comes at a few Hz: dropped 1 s ago
+    assert not f.update(1.9, 2.6)                       # still for longer than the window
+    assert f.dry_for(2.6) == 1.6
+    assert not f.update(float('nan'), 3.0)              # no reading: no evidence
+    assert WaterFlow(now=0.0).dry_for(4.0) == 4.0       # never flowed: dry since watching began
 
 
 def test_default_checks_is_the_constant():

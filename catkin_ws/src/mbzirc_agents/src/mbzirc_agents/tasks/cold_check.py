@@ -1,16 +1,22 @@
-"""When to stop pumping: the thermal camera's CheckFire answers, judged the same way by every water task.
+"""When is a fire out: the thermal camera's CheckFire answers, judged the same way by every water task.
 
-Why a shared judge: a single "no fire" answer is not evidence that a fire is out (the frame filter of the
-detector drops for a frame, the fire leaves the view for a moment, and a nearly quenched heater falls
-under the detection threshold while it still needs water). Water keeps flowing while the answers say
-"cold" C.COLD_CHECKS times in a row, and "cold" counts only after the fire was seen hot at least once
-while pumping (a fire never in sight is not a fire put out).
+The rule: a fire is out only when (a) the robot saw it hot from where it waters it, (b) water then flowed
+at it, and (c) it then read cold C.COLD_CHECKS times in a row, each with water flowing at it from there.
+A "no fire" answer alone is no evidence: the detector's frame filter drops for a frame, the robot looks
+at the wall beside the fire (mission seed 3: a fire at 63 % was reported out by a robot that never saw it
+hot from its watering pose), the pump runs dry or fails, and a nearly quenched heater falls under the
+detection threshold while it still needs water. The tasks say whether water flowed at the fire
+(`watered`: the pump on, the tank level dropping (`WaterFlow`), the robot still where it saw it hot);
+this module judges.
 """
 from __future__ import annotations
 
+import math
 from typing import Optional
 
 from .. import constants as C
+
+FLOW_WINDOW = 1.5   # s: water flows when the tank level dropped this recently (the level comes at a few Hz)
 
 
 class ColdConfirmation:
@@ -21,18 +27,50 @@ class ColdConfirmation:
         self.cold_in_row = 0
         self.seen_hot = False
 
-    def update(self, hot: Optional[bool]) -> bool:
-        """One answer in; True once the fire was hot and then cold `checks` times in a row."""
+    def update(self, hot: Optional[bool], watered: bool = True) -> bool:
+        """One answer in; True once the fire was hot and then cold `checks` times in a row.
+
+        `watered`: water flowed at the fire from where it was seen hot, up to this answer. A cold answer
+        without it ends the row (it says "not looking" or "no water" as much as "out"); a hot one always
+        restarts it (the fire still needs water)."""
         if hot:
             self.seen_hot, self.cold_in_row = True, 0
         elif hot is False and self.seen_hot:
-            self.cold_in_row += 1
+            self.cold_in_row = self.cold_in_row + 1 if watered else 0
         # None (detector silent): no evidence either way, the count stays
         return self.out
 
     @property
     def out(self) -> bool:
         return self.seen_hot and self.cold_in_row >= self.checks
+
+
+class WaterFlow:
+    """Whether water is flowing: the tank level (the robot's flow meter) dropped within `window` s.
+
+    Why the level and not the pump command: a pump that was told to start may not move water (a failed
+    actuator, an empty tank), and cold answers then say nothing about the fire."""
+
+    def __init__(self, now: float, window: float = FLOW_WINDOW) -> None:
+        self.window = window
+        self.since = now                 # when watching began (the pump was started)
+        self.level: Optional[float] = None
+        self.last_drop: Optional[float] = None
+
+    def update(self, level: float, now: float) -> bool:
+        """A tank level reading in (NaN: none); True while water flows."""
+        if math.isfinite(level):
+            if self.level is not None and level < self.level:
+                self.last_drop = now
+            self.level = level
+        return self.flowing(now)
+
+    def flowing(self, now: float) -> bool:
+        return self.last_drop is not None and now - self.last_drop <= self.window
+
+    def dry_for(self, now: float) -> float:
+        """Seconds since water was last seen flowing (or since watching began)."""
+        return now - (self.since if self.last_drop is None else self.last_drop)
 
 
 def dry_tank_verdict(cold: ColdConfirmation) -> tuple:
@@ -43,7 +81,7 @@ def dry_tank_verdict(cold: ColdConfirmation) -> tuple:
     for its last part (how large a part depends on the wall it sits on and the detector's contrast test),
     and how much water a fire needs is unknown (0.8-1.3x nominal in the real arena): no count of litres
     pumped can stand in for the sensing. A fire left cold but unconfirmed stays active for a refilled
-    robot, whose water on a fire that reads cold from the start confirms it (see the tasks).
+    robot, which judges it out only once it saw it hot again and watered it cold (see the tasks).
     """
     if cold.out:
         return True, 'cold with water flowing'

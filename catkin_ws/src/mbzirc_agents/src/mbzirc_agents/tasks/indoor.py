@@ -6,18 +6,22 @@ the sub-task `move` (UAV: a straight go_to; UGV: a straight drive), given by the
 from __future__ import annotations
 
 import math
+from typing import Optional
 
 import numpy as np
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
-from .cold_check import ColdConfirmation, dry_tank_verdict
+from .cold_check import ColdConfirmation, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
+WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
+NO_FLOW_TIME = 4.0         # s with the pump on and the tank level still: no water flows (a fault)
+NOT_SEEN_HOT = 'not seen hot from the watering pose: not judged out'
 
 
 def gen_enter_building(goal, agent) -> dict:
@@ -150,32 +154,40 @@ class SearchIndoor(AgentTask):
 
 class ExtinguishIndoorFire(AgentTask):
     """Face the fire at ~indoor_fire_distance (from the side the robot is on), turn until the thermal hot
-    spot is straight ahead, and pump until cold."""
+    spot is straight ahead, and pump until cold.
+
+    When it is out (tasks/cold_check.py): seen hot from the watering pose, then cold C.COLD_CHECKS times in a
+    row with water flowing at it (the tank level dropping) from that pose. A fire never seen hot from there
+    is never reported out: the goal fails with why, and the central unit tries again or gives it to
+    another robot."""
     INPUT_KEYS = ['fire_id']
 
     def __init__(self, name, agent, **args) -> None:
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
 
-    def _face_the_heat(self, tries: int = 3) -> None:
+    def _face_the_heat(self, tries: int = 3) -> Optional[float]:
         """Turn so that the thermal camera's fire is straight ahead (its bearing from the detection's body
-        relative position). Why: there is no hole to aim at indoors, and the pose the fire estimate was
-        faced from carries the GNSS error; the jet leaves along the heading (seen under realistic
-        uncertainty: 2 L pumped beside an indoor fire, 18 % of it in)."""
+        relative position); the heading it turned to, None when it did not turn. Why: there is no hole to
+        aim at indoors, and the pose the fire estimate was faced from carries the GNSS error; the jet leaves
+        along the heading (seen under realistic uncertainty: 2 L pumped beside an indoor fire, 18 % of it in)."""
         a = self.agent
+        turned = None
         for _ in range(tries):
             with self.sensed.lock:
                 fire, seen = self.sensed.fire, self.sensed.fire_time
             if fire is None or a.backend.now() - seen > 1.0:
-                return
+                break
             bearing = math.atan2(fire[1][1], fire[1][0])
             if not math.isfinite(bearing) or abs(bearing) < a.p.aim_bearing_tolerance:
-                return
+                break
             p = a.position()
+            turned = p[3] + bearing
             self.feedback('AIMING', f'turning {math.degrees(bearing):.0f} deg to the hot spot')
-            a.send_waypoint(p[0], p[1], p[2], p[3] + bearing)
+            a.send_waypoint(p[0], p[1], p[2], turned)
             self.sleep(1.0)
             self.sensed.fire = None                      # only detections of the new heading count
+        return turned
 
     def run(self, ud) -> str:
         a = self.agent
@@ -189,34 +201,82 @@ class ExtinguishIndoorFire(AgentTask):
         self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
         self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
         cold = ColdConfirmation()
-        if not self._seen_hot(cold, a.p.check_fire_time):
-            if not self._well_localised(ud.fire_id):
-                raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
-            return self._top_up(ud.fire_id)
-        self._face_the_heat()
-        try:
-            a.start_pump()
-            start = a.backend.now()
-            while not a.water_empty():
-                self.check_preempt()
-                if a.backend.now() - start > a.p.extinguish_timeout:
-                    raise TaskError('timeout while pumping')
-                self.feedback('SHOOTING', f'fire {ud.fire_id}: water {a.water_level:.2f} L')
-                self.sleep(0.5)
-                if cold.update(a.fire_detected()):
-                    break
-        finally:
-            a.stop_pump()
-        out, why = cold.out, 'extinguished'
-        if not out:                                     # tank empty: did the last water do it?
-            out, why = dry_tank_verdict(cold)
-            why = 'extinguished' if out else why
-            a.backend.loginfo(f'[{self.name}] fire {ud.fire_id}: tank dry, {why}')
+        if self._seen_hot(cold, a.p.check_fire_time):
+            turned = self._face_the_heat()
+            if turned is not None:                      # a new heading: seen hot from there, or no water
+                yaw = turned
+                cold = ColdConfirmation()
+                if not self._seen_hot(cold, a.p.check_fire_time):
+                    raise TaskError(f'fire {ud.fire_id} {NOT_SEEN_HOT}: hot before turning to its hot spot, '
+                                    'cold after; no water spent')
+        elif not self._well_localised(ud.fire_id):
+            raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
+        out, why = self._water(ud.fire_id, cold, yaw)
         if out:
             a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         water = a.water_level if math.isfinite(a.water_level) else 0.0
         self.result.update(extinguished=out, water_left=max(0.0, water), message=f'fire {ud.fire_id} {why}')
         return C.SUCCESS
+
+    def _water(self, fire_id: int, cold: ColdConfirmation, yaw: float) -> tuple:
+        """Pump from here, facing yaw (the watering pose: where the fire was checked from), until the fire
+        is judged out or the tank is empty; (out, why).
+
+        A fire not seen hot yet (a confirmed, well-localised track that reads cold) is topped up: it gets
+        ~top_up_time of water in which to show hot. Why: a fire being filled cools down in the thermal
+        image, so a fire left nearly full by a robot whose tank ran dry is invisible to the next one (seen
+        in a mission: 94 % full, "not in sight" three times, never finished). Water can finish it; the
+        verdict "out" cannot be given without seeing it (seen: a top-up from a pose that did not look at
+        the fire marked a fire at 63 % out): the goal fails, the fire stays active.
+
+        Cold answers count only with water flowing (the tank level dropping) and the robot still at the
+        watering pose; off it (pushed, turned) it is sent back there. A pump that moves no water for
+        NO_FLOW_TIME fails the goal.
+        """
+        a = self.agent
+        pose = np.append(a.position()[:3], yaw)
+        try:
+            a.start_pump()
+            start = a.backend.now()
+            flow = WaterFlow(start)
+            while not a.water_empty():
+                self.check_preempt()
+                now = a.backend.now()
+                if now - start > a.p.extinguish_timeout:
+                    raise TaskError('timeout while pumping')
+                if not cold.seen_hot and now - start >= a.p.top_up_time:
+                    raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: {now - start:.0f} s of top-up water on '
+                                    'its confirmed track, left active')
+                if flow.dry_for(now) > NO_FLOW_TIME:
+                    raise TaskError(f'no water flows: the tank level stayed at {a.water_level:.2f} L for '
+                                    f'{flow.dry_for(now):.0f} s with the pump on; fire {fire_id} not judged out')
+                if cold.seen_hot:
+                    self.feedback('SHOOTING', f'fire {fire_id}: water {a.water_level:.2f} L')
+                else:
+                    self.feedback('TOPPING_UP', f'fire {fire_id} reads cold but was never put out: water '
+                                                f'{a.water_level:.2f} L')
+                self.sleep(0.5)
+                at_pose = self._at(pose, a.position())
+                if not at_pose:
+                    a.send_waypoint(*pose)             # back to where it waters from
+                watered = flow.update(a.water_level, a.backend.now()) and at_pose
+                if cold.update(a.fire_detected(), watered):
+                    break
+        finally:
+            a.stop_pump()
+        if cold.out:
+            return True, 'extinguished'
+        if not cold.seen_hot:                           # the tank ran dry during a top-up
+            raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: the tank ran dry topping it up, left active')
+        out, why = dry_tank_verdict(cold)
+        a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {why}')
+        return out, 'extinguished' if out else why
+
+    def _at(self, pose, here) -> bool:
+        """Still at the watering pose (position and heading): looking where the fire was seen hot."""
+        p = self.agent.p
+        return (math.dist(pose[:3], here[:3]) <= WATERING_POSE_TOLERANCE
+                and abs(math.remainder(here[3] - pose[3], 2 * math.pi)) <= p.yaw_tolerance)
 
     def _seen_hot(self, cold: ColdConfirmation, seconds: float) -> bool:
         """Poll CheckFire for up to seconds (its frame filter needs > 1 s of hot frames) until hot."""
@@ -239,27 +299,3 @@ class ExtinguishIndoorFire(AgentTask):
         std = math.sqrt(max(cov[0], cov[7], 0.0))
         return (obj.status in (C.STATUS_ACTIVE, C.STATUS_LOST) and obj.num_updates >= TOP_UP_MIN_UPDATES
                 and math.isfinite(std) and std <= self.agent.p.top_up_max_std)
-
-    def _top_up(self, fire_id: int) -> str:
-        """Water a fire that reads cold but was never put out, for ~top_up_time, then mark it out.
-
-        Why: a fire being filled cools down in the thermal image, so a fire left nearly full by a robot
-        whose tank ran dry is invisible to the next one (seen in a mission: 94 % full, "not in sight"
-        three times, never finished). A well-localised confirmed track in front of us is that fire.
-        """
-        a = self.agent
-        seconds = a.p.top_up_time
-        self.feedback('TOPPING_UP', f'fire {fire_id} reads cold but was never put out: {seconds:.0f} s of water')
-        try:
-            a.start_pump()
-            end = a.backend.now() + seconds
-            while a.backend.now() < end and not a.water_empty():
-                self.check_preempt()
-                self.sleep(0.25)
-        finally:
-            a.stop_pump()
-        a.set_object_status(fire_id, C.STATUS_EXTINGUISHED)
-        water = a.water_level if math.isfinite(a.water_level) else 0.0
-        self.result.update(extinguished=True, water_left=max(0.0, water),
-                           message=f'fire {fire_id} topped up (it read cold) and marked extinguished')
-        return C.SUCCESS
