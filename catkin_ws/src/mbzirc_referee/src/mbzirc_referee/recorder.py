@@ -17,10 +17,12 @@ from mbzirc_ros_utils.periodic import PeriodicTimer
 from std_msgs.msg import Bool, String
 
 from mbzirc_arena import c3
+from mbzirc_arena.c3 import ARENA
 from mbzirc_arena import messages as M
 from mbzirc_arena.messages import feed_position
 
 from .report import write_report
+from .slam_inputs import SlamInputs
 from .summary import MissionRecord
 
 try:  # the simulator's types: optional so that the recorder still runs against a real-robot setup
@@ -29,6 +31,7 @@ except ImportError:  # pragma: no cover - depends on the workspace
     FireStateArray = Score = None
 
 SCORE_CLOCK_SLACK_S = 10.0   # s: a /sim/score may be computed at a clock a little ahead of ours
+MAP_FETCH_TIMEOUT_S = 15.0   # wall s: the SLAM maps asked for at the end of the trial
 
 
 def status_shape_ok(status: Any) -> bool:
@@ -69,6 +72,8 @@ class MissionRecorder:
         self.subs = [rospy.Subscriber(f"/{M.robot_ns(i)}/data_feed", AgentDataFeed, self._on_feed,
                                       callback_args=i, queue_size=1) for i in ids]
         self.subs.append(rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=1))
+        self.slam_inputs = SlamInputs(self.rec.slam, self.lock, ids,
+                                      float(rospy.get_param("~map_fetch_period", 30.0)))
         if FireStateArray is not None:
             self.subs.append(rospy.Subscriber("/sim/fires", FireStateArray, self._on_fires, queue_size=1))
             self.subs.append(rospy.Subscriber("/sim/score", Score, self._on_score, queue_size=1))
@@ -176,9 +181,10 @@ class MissionRecorder:
         if self.done:
             return
         self.done = True
+        self.slam_inputs.fetch_maps_within(MAP_FETCH_TIMEOUT_S)
         with self.lock:
             summary = self.rec.summary(self._wall(), reason, self.extra)
-            self.write(summary)
+        self.write(summary)
         print(f"[mission] END ({reason}): score {summary['score']} fires {summary['fires_extinguished']}/"
               f"{summary['fires_total']} sim {summary['sim_time_s']}s wall {summary['wall_time_s']}s "
               f"rtf {summary['real_time_factor']} crashes {summary['crashes'] or 'none'} -> {self.out_dir}",
@@ -188,6 +194,13 @@ class MissionRecorder:
             rospy.signal_shutdown(f"mission over: {reason}")
 
     def write(self, summary: dict) -> None:
+        """summary.json (and its extra copy), the SLAM floor maps, report.png."""
+        floor_maps = {}
+        try:
+            summary["floor_maps"], floor_maps = self.slam_inputs.write_maps(self.out_dir, self.rec.elapsed,
+                                                                            ARENA.floor_of)
+        except Exception as e:  # noqa: BLE001 - the summary matters more than the maps
+            rospy.logerr(f"mission_recorder: SLAM floor maps failed: {e}")
         paths = [os.path.join(self.out_dir, "summary.json")] + ([self.summary_path] if self.summary_path else [])
         for p in paths:
             d = os.path.dirname(os.path.abspath(p))
@@ -195,12 +208,14 @@ class MissionRecorder:
             with open(p, "w", encoding="utf-8") as f:
                 json.dump(summary, f, indent=2)
         try:
-            write_report(self.rec, os.path.join(self.out_dir, "report.png"))
+            with self.lock:
+                write_report(self.rec, os.path.join(self.out_dir, "report.png"), floor_maps=floor_maps)
         except Exception as e:  # noqa: BLE001 - the summary matters more than the picture
             rospy.logerr(f"mission_recorder: report.png failed: {e}")
 
     def _on_shutdown(self) -> None:
         if not self.done:
             self.done = True
-            with self.lock:
-                self.write(self.rec.summary(self._wall(), "interrupted", self.extra))
+            with self.lock:   # no map requests: the robots' services may be gone; the last maps fetched
+                summary = self.rec.summary(self._wall(), "interrupted", self.extra)
+            self.write(summary)

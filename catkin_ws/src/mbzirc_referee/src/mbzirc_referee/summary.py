@@ -9,6 +9,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
+from mbzirc_arena.c3 import ARENA
+
+from .indoor_flights import SlamRecord
+
 KIND_NAMES = {0: "facade", 1: "ground", 2: "indoor"}  # ual_sim/FireState kind constants
 SUMMARY_KEYS = ("seed", "sim_time_s", "wall_time_s", "real_time_factor", "score", "fires_extinguished",
                 "fires_total", "crashes", "fires")
@@ -47,6 +51,7 @@ class MissionRecord:
     closest_approach: dict = field(default_factory=dict)   # who, when and where min_separation happened
     elapsed: float = 0.0
     robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
+    slam: SlamRecord = field(default_factory=SlamRecord)       # indoor flights on SLAM (indoor_flights.py)
 
     def update_fire(self, fire_id: str, kind: int, floor: int, position: tuple[float, float, float],
                     active: bool, extinguished: bool, progress: float, t_ext: float) -> None:
@@ -114,6 +119,10 @@ class MissionRecord:
             return "all_fires_out"
         return None
 
+    def indoor_flights(self) -> list[dict]:
+        """Every indoor flight on SLAM with its pose error against the truth (empty without SLAM)."""
+        return self.slam.flights(self.elapsed, ARENA.floor_of)
+
     def summary(self, wall_time: float, end_reason: str = "", extra: Optional[dict[str, Any]] = None) -> dict:
         """The summary.json object."""
         fires = sorted(self.fires.values(), key=lambda f: (f.kind, f.floor, f.fire_id))
@@ -135,6 +144,7 @@ class MissionRecord:
                        "t_extinguished": None if f.t_extinguished is None else round(f.t_extinguished, 2),
                        "progress": round(f.progress, 3), "position": [round(v, 2) for v in f.position]}
                       for f in fires],
+            "indoor_flights": self.indoor_flights(),
         }
         out.update(extra or {})
         return out

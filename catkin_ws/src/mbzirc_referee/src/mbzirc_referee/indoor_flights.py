@@ -1,0 +1,132 @@
+"""Indoor flights on SLAM and their pose error against the truth (pure; the referee's side).
+
+An indoor flight is a contiguous period in which a robot's `localization/source` is `slam` (indoor_localization:
+no GNSS fix, the anchored SLAM pose is the valid one). Its error is the horizontal distance between the robot's
+`localization/pose` and the simulator's true pose, at every true pose of the period (/sim/robots, 2 Hz), the
+SLAM pose interpolated at that time between two poses at most `max_gap` s apart (none: the sample is
+skipped). Its floor is the storey of most of its true heights (rule: `mbzirc_arena.floor_of`).
+"""
+from __future__ import annotations
+
+import bisect
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+__all__ = ["SlamRecord", "periods", "interpolate_xy", "flight_summary", "anchor_from_pair", "MAX_GAP_S"]
+
+SLAM = "slam"
+MAX_GAP_S = 0.25      # s: two SLAM poses further apart do not interpolate (15 Hz scans, a few dropped)
+Sample = tuple        # (t, x, y, z)
+
+
+def periods(changes: Sequence[tuple], t_end: float, source: str = SLAM) -> list[tuple]:
+    """[(t_start, t_end)] of the contiguous periods where the source was `source`, from its changes
+    [(t, source)] in time order; one still open ends at t_end."""
+    out, start = [], None
+    for t, s in changes:
+        if s == source and start is None:
+            start = t
+        elif s != source and start is not None:
+            out.append((start, t))
+            start = None
+    if start is not None:
+        out.append((start, max(start, t_end)))
+    return out
+
+
+def interpolate_xy(samples: Sequence[Sample], t: float, max_gap: float = MAX_GAP_S,
+                   times: Optional[Sequence[float]] = None) -> Optional[tuple]:
+    """(x, y) of time-ordered samples at t, linear between the two around it; None when t is outside them
+    or they are more than max_gap apart. `times`: the samples' times, when the caller has them already."""
+    times = [s[0] for s in samples] if times is None else times
+    i = bisect.bisect_left(times, t)
+    if i < len(samples) and times[i] == t:
+        return samples[i][1], samples[i][2]
+    if i == 0 or i == len(samples):
+        return None
+    a, b = samples[i - 1], samples[i]
+    if b[0] - a[0] > max_gap:
+        return None
+    f = (t - a[0]) / (b[0] - a[0])
+    return a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])
+
+
+def anchor_from_pair(arena_pose: tuple, map_pose: tuple) -> tuple:
+    """The pose (x, y, yaw) of the map frame in the arena given one robot pose (x, y, yaw) in both."""
+    yaw = arena_pose[2] - map_pose[2]
+    c, s = math.cos(yaw), math.sin(yaw)
+    return (arena_pose[0] - (c * map_pose[0] - s * map_pose[1]),
+            arena_pose[1] - (s * map_pose[0] + c * map_pose[1]), math.atan2(math.sin(yaw), math.cos(yaw)))
+
+
+def flight_summary(robot: str, period: tuple, slam: Sequence[Sample], truth: Sequence[Sample],
+                   floor_of: Callable[[float], int], max_gap: float = MAX_GAP_S) -> dict:
+    """One flight's entry of summary.json: robot, floor, start, end, duration, error samples, RMS and max."""
+    t0, t1 = period
+    inside = [s for s in slam if t0 <= s[0] <= t1]
+    times = [s[0] for s in inside]
+    errors, floors = [], Counter()
+    for t, x, y, z in (s for s in truth if t0 <= s[0] <= t1):
+        floors[floor_of(z)] += 1
+        est = interpolate_xy(inside, t, max_gap, times)
+        if est is not None:
+            errors.append(math.hypot(est[0] - x, est[1] - y))
+    if not floors:                       # no truth in the flight: the SLAM pose's own heights say where
+        floors.update(floor_of(s[3]) for s in inside)
+    return {"robot": robot, "floor": floors.most_common(1)[0][0] if floors else None,
+            "t_start": round(t0, 2), "t_end": round(t1, 2), "duration_s": round(t1 - t0, 2),
+            "slam_poses": len(inside), "samples": len(errors),
+            "rms_error_m": round(math.sqrt(sum(e * e for e in errors) / len(errors)), 3) if errors else None,
+            "max_error_m": round(max(errors), 3) if errors else None}
+
+
+@dataclass
+class SlamRecord:
+    """What the referee keeps of the robots' SLAM: sources, SLAM poses while on SLAM, truth, anchors."""
+    sources: dict[str, list[tuple]] = field(default_factory=dict)     # robot -> [(t, source)] changes
+    poses: dict[str, list[Sample]] = field(default_factory=dict)      # robot -> localization/pose on SLAM
+    truth: dict[str, list[Sample]] = field(default_factory=dict)      # robot -> true poses (SLAM robots)
+    anchors: dict[str, tuple] = field(default_factory=dict)           # robot -> newest arena <- <ns>/map
+
+    def set_source(self, robot: str, t: float, source: str) -> bool:
+        """Record the robot's source; True when it changed."""
+        changes = self.sources.setdefault(robot, [])
+        if changes and changes[-1][1] == source:
+            return False
+        changes.append((t, source))
+        return True
+
+    def on_slam(self, robot: str) -> bool:
+        changes = self.sources.get(robot)
+        return bool(changes) and changes[-1][1] == SLAM
+
+    def add_pose(self, robot: str, t: float, x: float, y: float, z: float) -> None:
+        """A localization/pose, kept while the robot is on SLAM (in time order: a late one is dropped)."""
+        poses = self.poses.setdefault(robot, [])
+        if self.on_slam(robot) and (not poses or t > poses[-1][0]):
+            poses.append((t, x, y, z))
+
+    def add_truth(self, robot: str, t: float, x: float, y: float, z: float) -> None:
+        """A true pose, kept for the robots that run SLAM (the others have no indoor flight to score)."""
+        if robot in self.sources:
+            tr = self.truth.setdefault(robot, [])
+            if not tr or t > tr[-1][0]:
+                tr.append((t, x, y, z))
+
+    def flights(self, t_end: float, floor_of: Callable[[float], int]) -> list[dict]:
+        """Every indoor flight of every robot, in time order."""
+        out = [flight_summary(robot, p, self.poses.get(robot, []), self.truth.get(robot, []), floor_of)
+               for robot, changes in sorted(self.sources.items()) for p in periods(changes, t_end)]
+        return sorted(out, key=lambda f: (f["t_start"], f["robot"]))
+
+    def map_floors(self, t_end: float, floor_of: Callable[[float], int]) -> dict[str, int]:
+        """robot -> the floor its map belongs to: the floor of most of its time on SLAM (robots never on
+        SLAM have no indoor map)."""
+        time_on = {}
+        for f in self.flights(t_end, floor_of):
+            if f["floor"] is not None:
+                per = time_on.setdefault(f["robot"], Counter())
+                per[f["floor"]] += f["duration_s"] + 1e-6
+        return {robot: per.most_common(1)[0][0] for robot, per in time_on.items()}
