@@ -76,8 +76,10 @@ def test_samples_outside_the_flight_or_without_slam_poses_around_do_not_count():
 
 
 def _source_at(t):
-    """The schedule of robot 2's source: slam 100-130 s (floor 1) and 200-210 s (floor 2), then lost."""
-    return "slam" if 100.0 <= t < 130.0 or 200.0 <= t < 210.0 else ("none" if t >= 210.0 else "gnss")
+    """The schedule of robot 2's source: slam 100-130 s (floor 1), 200-205 s and 207-210 s (floor 2), lost
+    between and after."""
+    return "slam" if 100.0 <= t < 130.0 or 200.0 <= t < 205.0 or 207.0 <= t < 210.0 else \
+        ("none" if t >= 200.0 else "gnss")
 
 
 def _record_with_flights():
@@ -95,17 +97,18 @@ def _record_with_flights():
 def test_the_record_keeps_slam_poses_only_on_slam_and_truth_only_of_slam_robots():
     rec = _record_with_flights()
     assert "1" not in rec.truth and len(rec.truth["2"]) == 281
-    assert all(100.0 <= p[0] < 130.0 or 200.0 <= p[0] < 210.0 for p in rec.poses["2"])
-    assert [c[1] for c in rec.sources["2"]] == ["gnss", "slam", "gnss", "slam", "none"]
+    assert all(_source_at(p[0]) == "slam" for p in rec.poses["2"])
+    assert [c[1] for c in rec.sources["2"]] == ["gnss", "slam", "gnss", "slam", "none", "slam", "none"]
     assert rec.sources["2"][1][0] == pytest.approx(100.0, abs=0.07)
 
 
 def test_flights_and_the_floor_of_a_map():
     rec = _record_with_flights()
     flights = rec.flights(300.0, FLOOR_OF)
-    assert [(f["robot"], f["floor"], f["t_start"]) for f in flights] == [("2", 1, 100.0), ("2", 2, 200.0)]
+    assert [(f["robot"], f["floor"], round(f["t_start"])) for f in flights] == [("2", 1, 100), ("2", 2, 200),
+                                                                               ("2", 2, 207)]
     assert flights[0]["duration_s"] == pytest.approx(30.0, abs=0.1) and flights[0]["rms_error_m"] == 0.5
-    assert rec.map_floors(300.0, FLOOR_OF) == {"2": 1}    # 30 s on floor 1, 10 s on floor 2
+    assert rec.map_floors(300.0, FLOOR_OF) == {"2": 1}    # 30 s on floor 1 in one flight, 8 s on floor 2 in two
 
 
 def test_summary_without_slam_has_an_empty_list_and_is_complete():
@@ -120,5 +123,5 @@ def test_summary_lists_the_flights():
     r.slam = _record_with_flights()
     r.set_score(300.0, 0.0, [])
     s = r.summary(10.0, "time")
-    assert [f["floor"] for f in s["indoor_flights"]] == [1, 2]
+    assert [f["floor"] for f in s["indoor_flights"]] == [1, 2, 2]
     assert {"robot", "floor", "duration_s", "samples", "rms_error_m", "max_error_m"} <= set(s["indoor_flights"][0])
