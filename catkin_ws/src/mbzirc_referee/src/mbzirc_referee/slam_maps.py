@@ -34,6 +34,7 @@ UNKNOWN, FREE, OCCUPIED = 0, 1, 2  # trinary codes: merging is a max
 PGM_VALUE = np.array([205, 254, 0], dtype=np.uint8)   # indexed by code
 MAX_SOURCE_CELLS = 4096 * 4096     # a bigger grid is refused as malformed
 MAX_OUTPUT_SIDE = 4096             # cells per side of a placed map at most (coarser resolution beyond)
+BAND_ROWS = 256                    # output rows sampled at once
 
 
 class GridError(ValueError):
@@ -136,13 +137,14 @@ def place(grids: Sequence[tuple]) -> Optional[ArenaMap]:
     w, h = max(1, math.ceil((x1 - x0) / res - 1e-9)), max(1, math.ceil((y1 - y0) / res - 1e-9))
     out = np.zeros((h, w), dtype=np.uint8)
     cx = x0 + (np.arange(w) + 0.5) * res
-    cy = y0 + (np.arange(h) + 0.5) * res
-    gx, gy = np.meshgrid(cx, cy)
     for codes, gres, pose, _ in placed:
-        r, c = _to_grid_cells(pose, gres, gx, gy)          # each output cell samples the grid
-        inside = (r >= 0) & (r < codes.shape[0]) & (c >= 0) & (c < codes.shape[1])
-        np.maximum(out, np.where(inside, codes[np.clip(r, 0, codes.shape[0] - 1),
-                                               np.clip(c, 0, codes.shape[1] - 1)], UNKNOWN), out=out)
+        for top in range(0, h, BAND_ROWS):                 # each output cell samples the grid (in bands:
+            band = out[top:top + BAND_ROWS]                # a few MB at a time, not a 4096 x 4096 mesh)
+            gx, gy = np.meshgrid(cx, y0 + (np.arange(top, top + band.shape[0]) + 0.5) * res)
+            r, c = _to_grid_cells(pose, gres, gx, gy)
+            inside = (r >= 0) & (r < codes.shape[0]) & (c >= 0) & (c < codes.shape[1])
+            np.maximum(band, np.where(inside, codes[np.clip(r, 0, codes.shape[0] - 1),
+                                                    np.clip(c, 0, codes.shape[1] - 1)], UNKNOWN), out=band)
         rows, cols = np.nonzero(codes == OCCUPIED)           # and every wall cell marks its own place
         if rows.size:
             cs, sn = math.cos(pose[2]), math.sin(pose[2])

@@ -128,3 +128,13 @@ def test_map_entry_counts_cells_and_names_files():
     assert e["floor"] == 2 and e["robots"] == ["0", "3"] and e["yaml"] == "map_floor2.yaml"
     assert e["image"] == "map_floor2.pgm" and e["size"] == [3, 2]
     assert e["occupied_cells"] == 3 and e["free_cells"] == 3
+
+
+def test_sampling_in_bands_gives_the_same_map(monkeypatch):
+    from mbzirc_referee import slam_maps
+    g = grid(width=30, height=25, res=0.1)
+    g.cells[5:20, 3:27] = 0
+    g.cells[12, 3:27] = 100
+    whole = place([(g, (1.0, 2.0, 0.7))])
+    monkeypatch.setattr(slam_maps, "BAND_ROWS", 4)
+    assert np.array_equal(place([(g, (1.0, 2.0, 0.7))]).codes, whole.codes) and whole.codes.shape[0] > 8
