@@ -5,8 +5,8 @@ Subscribed per robot: `localization/source` and `localization/pose` (indoor_loca
 (hector_mapping: paired by stamp with `localization/pose`, it gives the anchor arena <- `<ns>/map` without
 reading /tf, which ual_sim fills at every tick); `/sim/robots` (truth, 2 Hz, in the order of `/sim/robot_ids`).
 The maps are not subscribed (a 2048 x 2048 grid of 4 MB that hector_mapping would then build and send every
-2 s per robot): each robot that has been on SLAM is asked for its map (`dynamic_map`, nav_msgs/GetMap) every
-`fetch_period` sim seconds and once more at the end of the trial; on an interrupted trial (Ctrl+C: the
+2 s per robot): each SLAM robot that has been indoors (or on `slam`) is asked for its map (`dynamic_map`,
+nav_msgs/GetMap) every `fetch_period` sim seconds and once more at the end of the trial; on an interrupted trial (Ctrl+C: the
 services may be gone) the last map fetched is written.
 """
 from __future__ import annotations
@@ -132,10 +132,10 @@ class SlamInputs:
 
     # ---- maps ------------------------------------------------------------------------------------
     def fetch_maps(self, _event: Any = None) -> None:
-        """Ask every robot that has been on SLAM for its map; a malformed one is refused (throttled)."""
+        """Ask every SLAM robot that has been indoors (or on slam) for its map; a malformed one is refused (throttled)."""
         with self.fetch_lock:
             with self.lock:
-                robots = [r for r, changes in self.slam.sources.items() if any(s == "slam" for _, s in changes)]
+                robots = list(self.slam.been_inside)
             for robot in sorted(robots):
                 name = f"/{M.robot_ns(robot)}/dynamic_map"
                 try:
@@ -176,7 +176,7 @@ class SlamInputs:
             grid, frame = grids.get(robot, (None, ""))
             anchor = (0.0, 0.0, 0.0) if frame == self.arena_frame else anchors.get(robot)
             if grid is None or anchor is None:
-                rospy.logwarn(f"mission_recorder: robot {robot} flew on SLAM on floor {floor} but its "
+                rospy.logwarn(f"mission_recorder: robot {robot} flew indoors on floor {floor} but its "
                               f"{'map' if grid is None else 'anchor'} never came: not in map_floor{floor}")
                 continue
             by_floor.setdefault(floor, []).append((robot, grid, anchor))

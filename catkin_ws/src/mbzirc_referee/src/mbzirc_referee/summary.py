@@ -51,7 +51,7 @@ class MissionRecord:
     closest_approach: dict = field(default_factory=dict)   # who, when and where min_separation happened
     elapsed: float = 0.0
     robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
-    slam: SlamRecord = field(default_factory=SlamRecord)       # indoor flights on SLAM (indoor_flights.py)
+    slam: SlamRecord = field(default_factory=lambda: SlamRecord(footprints=ARENA.footprints))  # indoor_flights.py
 
     def update_fire(self, fire_id: str, kind: int, floor: int, position: tuple[float, float, float],
                     active: bool, extinguished: bool, progress: float, t_ext: float) -> None:

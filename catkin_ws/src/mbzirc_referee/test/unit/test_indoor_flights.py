@@ -5,8 +5,8 @@ import math
 import pytest
 
 from mbzirc_arena.c3 import ARENA
-from mbzirc_referee.indoor_flights import (SlamRecord, anchor_from_pair, flight_summary, interpolate_xy,
-                                           periods)
+from mbzirc_referee.indoor_flights import (SlamRecord, anchor_from_pair, flight_summary, indoor_periods,
+                                           interpolate_xy, joined, periods)
 from mbzirc_referee.slam_maps import compose
 from mbzirc_referee.summary import MissionRecord, check_summary
 
@@ -94,12 +94,51 @@ def _record_with_flights():
     return rec
 
 
-def test_the_record_keeps_slam_poses_only_on_slam_and_truth_only_of_slam_robots():
+def test_the_record_keeps_poses_and_truth_only_of_robots_that_run_slam():
     rec = _record_with_flights()
-    assert "1" not in rec.truth and len(rec.truth["2"]) == 281
-    assert all(_source_at(p[0]) == "slam" for p in rec.poses["2"])
+    rec.add_pose("1", 100.0, 1.0, 2.0, 3.0)          # no localization source: no SLAM
+    assert "1" not in rec.truth and "1" not in rec.poses and len(rec.truth["2"]) == 281
+    assert len(rec.poses["2"]) == len(_slam(90.0, 220.0))
     assert [c[1] for c in rec.sources["2"]] == ["gnss", "slam", "gnss", "slam", "none", "slam", "none"]
     assert rec.sources["2"][1][0] == pytest.approx(100.0, abs=0.07)
+    assert rec.been_inside == {"2"}
+
+
+BOX = (20.0, 0.0, 40.0, 10.0, 15.0)                  # a building: x 20-40, y 0-10, top 15 m
+
+
+def test_indoors_is_inside_a_footprint_below_its_top():
+    assert indoor_periods([], [BOX]) == []
+    truth = [(t, 10.0 + t, 5.0, 16.0 if 24.0 <= t < 26.0 else 6.0) for t in range(0, 40)]   # x 10..49
+    assert indoor_periods(truth, [BOX]) == [(10, 23), (26, 30)]                   # above the top at 24-25 s
+
+
+def test_periods_closer_than_the_join_are_one():
+    assert joined([(10.0, 20.0), (20.5, 30.0), (40.0, 41.0), (5.0, 12.0)], 1.0) == [(5.0, 30.0), (40.0, 41.0)]
+    assert joined([]) == []
+
+
+def test_a_robot_indoors_on_gnss_flies_indoors_too_and_its_slam_pose_is_scored():
+    rec = SlamRecord(footprints=(BOX,))
+    rec.set_source("3", 0.0, "gnss")                  # GNSS everywhere: the source never says slam
+    for t, x, y, z in _slam(0.0, 40.0, offset=(0.0, 0.2)):
+        rec.add_pose("3", t, x, y, z)
+    for t, x, y, z in _truth(0.0, 40.0):               # x 10..50: inside from t = 10 to 30
+        rec.add_truth("3", t, x, y, z)
+    (f,) = rec.flights(40.0, FLOOR_OF)
+    assert (f["t_start"], f["t_end"], f["on_slam_s"], f["floor"]) == (10.0, 30.0, 0.0, 1)
+    assert f["samples"] == 41 and f["rms_error_m"] == pytest.approx(0.2) and rec.been_inside == {"3"}
+
+
+def test_slam_and_indoor_periods_of_one_entry_are_one_flight():
+    rec = SlamRecord(footprints=(BOX,))
+    rec.set_source("2", 0.0, "gnss")
+    rec.set_source("2", 10.2, "slam")                 # the source follows the truth by a fraction of a second
+    rec.set_source("2", 30.3, "gnss")
+    for t, x, y, z in _truth(0.0, 40.0):
+        rec.add_truth("2", t, x, y, z)
+    (f,) = rec.flights(40.0, FLOOR_OF)
+    assert (f["t_start"], f["t_end"], f["on_slam_s"]) == (10.0, 30.3, 20.1)
 
 
 def test_flights_and_the_floor_of_a_map():
