@@ -60,6 +60,10 @@ class AgentParams:
     parked_half_size: float = _param(0.75, 'm: a landed UAV keeps the box x, y +- this, z 0..parked_height')
     parked_height: float = _param(2.0, 'm, top of the parked box above the UAV')
     refill_timeout: float = _param(60.0, 's waiting at home for a full tank / a new blanket')
+    reland_after: float = _param(20.0, 's landed at home without the reset before landing on the pad again '
+                                       '(the GNSS landing may miss it)')
+    reland_attempts: int = _param(2, 'landings again on the pad before the last ~refill_timeout wait (0: none)')
+    reland_height: float = _param(2.0, 'm of the take-off before landing on the pad again')
     facade_holders: List[List[float]] = _param(_points(C.FACADE_HOLDERS), 'x, y, z of the facade fire holders '
                                                'search_facade visits when its goal has no path', lengths=(3,))
     facade_standoff: float = _param(C.FACADE_STANDOFF, 'm in front of a facade fire holder to check it')
@@ -86,7 +90,8 @@ class AgentParams:
     opening_standoff: float = _param(1.0, 'm from the wall kept at least while centring on an opening')
     opening_tolerance: float = _param(0.12, "m off the opening's middle that counts as centred")
     opening_speed: float = _param(0.4, 'm/s through an opening')
-    opening_timeout: float = _param(20.0, 's to find and centre on an opening before giving up (holding)')
+    opening_timeout: float = _param(20.0, 's to find and centre on an opening, and without progress through it, '
+                                          'before giving up (holding; backing out when in it)')
     opening_jump_max: float = _param(0.5, "m the opening's middle may move between two scans (beyond the "
                                      "robot's own motion) before the passage is aborted")
     opening_keep_off: float = _param(0.6, 'm: in an opening, no velocity towards a laser return nearer than '
@@ -163,6 +168,10 @@ def _check(f: Any, value: Any) -> Any:
     kind, lengths, choices = f.type, f.metadata['lengths'], f.metadata['choices']
     if kind == 'float':
         return _number(value)
+    if kind == 'int':
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ValueError(f'expected a whole number >= 0, got {value!r}')
+        return value
     if kind == 'bool':
         if not isinstance(value, bool):
             raise ValueError(f'expected true or false, got {value!r}')

@@ -26,10 +26,11 @@ UAV_TASKS = [
     ('search_indoor', indoor.SearchIndoor, 'SearchIndoor', indoor.gen_search_indoor_uav, ['move']),
     ('extinguish_indoor_fire', indoor.ExtinguishIndoorFire, 'ExtinguishIndoorFire', indoor.gen_indoor_fire,
      ['move']),
-    ('go_home_and_refill', U.GoHomeAndRefill, 'GoHomeAndRefill', U.gen_empty, ['go_to', 'land']),
+    ('go_home_and_refill', U.GoHomeAndRefill, 'GoHomeAndRefill', U.gen_empty, ['go_to', 'land', 'take_off']),
 ]
 # Sub-task name -> (class, task_args)
-UAV_SUB_TASKS = {'go_to': (U.GoTo, {}), 'move': (U.GoTo, {'straight': True}), 'land': (U.Land, {})}
+UAV_SUB_TASKS = {'go_to': (U.GoTo, {}), 'move': (U.GoTo, {'straight': True}), 'land': (U.Land, {}),
+                 'take_off': (U.TakeOff, {})}
 
 
 def register_tasks(agent: Any, tasks: list, sub_tasks: Dict[str, tuple]) -> None:

@@ -103,8 +103,8 @@ class FakeUal:
                 if v is not None and self.state in (State.FLYING_AUTO, State.FLYING_MANUAL):
                     self.goal = None
                     self.pos = self.pos + v * self.speedup * dt
-                if self.goal is not None:
-                    g, gy = self.goal
+                if self.goal is not None and self.state not in (State.LANDED_DISARMED, State.LANDED_ARMED):
+                    g, gy = self.goal                       # (landed, it stays put as the GNSS error moves)
                     g = g - self.gnss_bias                  # flown in the frame of the GNSS fix
                     if self.state == State.LANDING:
                         g[2] = 0.0                          # down to the ground, whatever the fix says

@@ -1,0 +1,102 @@
+"""go_home_and_refill against the fake UAL, with the competition's reset as the test's rule: a full tank
+after RESET_TIME s landed within PAD_RADIUS of the robot's home pad (true position). The landing is flown on
+GNSS, whose error moves the robot off the pad."""
+import threading
+
+import numpy as np
+from mbzirc_comm_objs.msg import GoHomeAndRefillGoal, TakeOffGoal
+from uav_abstraction_layer.msg import State
+
+from fake_backend import FakeBackend
+from fake_ual import start_uav, stop_agent
+
+PAD_RADIUS, RESET_TIME = 1.5, 5.0     # the test's reset rule
+HOME = np.zeros(2)                    # robot 2's pad in the arena model
+
+
+class Reset:
+    """The human reset: refills the fake UAL's tank once it has been landed near the pad for RESET_TIME s;
+    counts the take-offs it sees."""
+
+    def __init__(self, be, ual):
+        self.stop, self.take_offs, self.landings = False, 0, []
+        landed_since, was_landed = None, True
+
+        def loop():
+            nonlocal landed_since, was_landed
+            while not self.stop:
+                landed = ual.state == State.LANDED_DISARMED
+                if landed and not was_landed:
+                    self.landings.append(float(np.linalg.norm(ual.pos[:2] - HOME)))
+                if was_landed and not landed:
+                    self.take_offs += 1
+                was_landed = landed
+                near = landed and np.linalg.norm(ual.pos[:2] - HOME) <= PAD_RADIUS
+                landed_since = (landed_since or be.clock.now()) if near else None
+                if near and be.clock.now() - landed_since >= RESET_TIME:
+                    ual.water = 2.0
+                be.clock.sleep(0.1)
+        be.clock.start_thread(loop, name='reset')
+
+
+def fly_out(be, ual):
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=3.0))
+    assert s.wait(20) == 'succeeded', s.result.message
+    ual.water = 0.3
+
+
+def wander(be, ual, start, end, after_landings, reset, seconds=10.0):
+    """The GNSS bias is start (set before the take-off: a step later is a pose jump, which the agent
+    doubts) and moves to end over `seconds` once the robot has landed after_landings times."""
+    ual.gnss_bias = np.array(start, float)
+
+    def loop():
+        while len(reset.landings) < after_landings and not reset.stop:
+            be.clock.sleep(0.1)
+        t0 = be.clock.now()
+        while not reset.stop and be.clock.now() - t0 < seconds:
+            k = (be.clock.now() - t0) / seconds
+            ual.gnss_bias = (1 - k) * np.array(start, float) + k * np.array(end, float)
+            be.clock.sleep(0.1)
+        ual.gnss_bias = np.array(end, float)
+    be.clock.start_thread(loop, name='gnss')
+
+
+def test_a_uav_landed_off_its_pad_by_its_gnss_error_lands_on_it_again():
+    """Realistic seed 102: the blanket UAV landed 1.3-1.5 m off its pad (GNSS) and waited for the reset
+    the whole trial. Here it lands 1.8 m off; the error then moves to 0.3 m: no reset within ~reland_after
+    s -> it takes off and lands again, on the pad this time, and is refilled."""
+    be = FakeBackend()
+    agent, ual = start_uav(be, speedup=4.0)
+    reset = Reset(be, ual)
+    try:
+        wander(be, ual, (1.8, 0.0, 0.0), (0.3, 0.0, 0.0), after_landings=1, reset=reset)
+        fly_out(be, ual)
+        s = be.servers['go_home_and_refill_action']
+        s.send(GoHomeAndRefillGoal())
+        assert s.wait(400) == 'succeeded', s.result.message
+        assert reset.landings[0] > PAD_RADIUS and reset.landings[-1] <= PAD_RADIUS, reset.landings
+        assert len(reset.landings) == 2 and reset.take_offs == 2, (reset.landings, reset.take_offs)
+        assert any('landing on it again' in m for m in be.warns), be.warns
+    finally:
+        reset.stop = True
+        stop_agent(agent, ual, be)
+
+
+def test_landings_again_are_bounded_then_the_task_fails():
+    """An error that stays 1.8 m: ~reland_attempts landings again, then the ~refill_timeout wait, then a
+    failure the central unit sees (not a wait for ever)."""
+    be = FakeBackend()
+    agent, ual = start_uav(be, {'reland_attempts': 1, 'refill_timeout': 10.0}, speedup=4.0)
+    reset = Reset(be, ual)
+    try:
+        ual.gnss_bias = np.array((1.8, 0.0, 0.0))
+        fly_out(be, ual)
+        s = be.servers['go_home_and_refill_action']
+        s.send(GoHomeAndRefillGoal())
+        assert s.wait(400) == 'aborted', s.result.message
+        assert 'timeout' in s.result.message and len(reset.landings) == 2, (s.result.message, reset.landings)
+    finally:
+        reset.stop = True
+        stop_agent(agent, ual, be)
