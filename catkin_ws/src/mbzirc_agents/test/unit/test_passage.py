@@ -253,6 +253,24 @@ def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):
     assert np.linalg.norm(ual.pos[:2] - (15.7, 8.5)) < 0.3, ual.pos
 
 
+
+@pytest.mark.parametrize('bias_z', [-0.5, 0.4])
+def test_indoor_search_legs_are_flown_at_true_heights(uav, bias_z):
+    """Realistic seed 102: a GNSS height 0.5 m under the truth flew a leg to 6.5 m at a true 7.0 m, into
+    the lintel (7.2 m) of an interior doorway. The search path's heights are the arena model's: flown at
+    the true height, by the altimeter's estimate of the vertical GNSS error, whatever that error."""
+    agent, ual, be, scene = uav
+    ual.gnss_bias = np.array([0.0, 0.0, bias_z])
+    ual.pos = np.array([22.7, 14.5, 7.5 - bias_z])       # in at the window's height, by its GNSS
+    ual.yaw = math.pi
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=1, path=[pose(20.5, 14.5, 6.5, math.pi)]))
+    assert s.wait(200) == 'succeeded', s.result.message
+    assert abs(ual.pos[2] - 6.5) < 0.2, f'true height {ual.pos[2]:.2f}, GNSS error {bias_z:+.1f}'
+
+
 def test_the_passage_reserves_the_way_aside_to_the_opening():
     """The airspace reserved for a passage holds the sideways move to the opening (3.5 m here) too."""
     from mbzirc_agents.tasks.passage import passage_box

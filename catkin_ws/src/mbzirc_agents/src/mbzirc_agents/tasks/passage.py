@@ -181,10 +181,11 @@ class LaserPassage:
         if not a.p.laser_openings:
             return False
         here = a.position()
-        if a.ROBOT_TYPE == 'uav' and target[2] < here[2] - 0.2:
+        z_flown = a.at_true_height(target)[2] if a.ROBOT_TYPE == 'uav' else None   # target's z: a true height
+        if z_flown is not None and z_flown < here[2] - 0.2:
             # down to the leg's end height first: a doorway lower than the UAV is under the laser's plane
             # (seen: in at a window's 7.5 m, the interior doorway up to 7.2 m looked like a wall)
-            a.move_to(self.task, (here[0], here[1], float(target[2])), here[3], 'down to the leg\'s height')
+            a.move_to(self.task, (here[0], here[1], z_flown), here[3], 'down to the leg\'s height')
             self.task.sleep(0.3)                     # a scan at that height
         for _ in range(5):                           # scans reach the task only while it runs
             msg = self._fresh_scan()
@@ -217,7 +218,9 @@ class LaserPassage:
                               f'({seen.lateral:+.2f} m aside) on the leg: passing it with the laser')
             # a UAV passes at the lower of its height and the leg's target height, true by its altimeter (a
             # doorway may be lower than the window it came in by: up to 2.2 m above the floor in ual_sim)
-            height = min(float(target[2]), float(here[2])) if a.ROBOT_TYPE == 'uav' else None
+            true_z = self.height_now()
+            height = (min(float(target[2]), float(here[2]) if true_z is None else true_z)
+                      if a.ROBOT_TYPE == 'uav' else None)
             self.go_through('doorway', h, depth, width=seen.width, prior=seen.lateral, height=height)
             return True
         return False

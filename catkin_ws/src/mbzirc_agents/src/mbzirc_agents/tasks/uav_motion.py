@@ -129,7 +129,9 @@ class GoTo(AgentTask):
     A start or target inside a building footprint (indoor flight, windows) is flown straight: indoors
     the caller's waypoints are the path.
 
-    Args (task_args): straight (False): fly one straight leg (entering through a window).
+    Args (task_args): straight (False): fly one straight leg (entering through a window); true_height
+    (False): the waypoint's z is a true height (the arena model's), flown corrected by the UAV's vertical
+    GNSS error (UavAgent.at_true_height), not a GNSS one (a sensed object's, a pose's).
     """
     INPUT_KEYS = ['waypoint']
 
@@ -138,6 +140,8 @@ class GoTo(AgentTask):
         (target, yaw) = ud.waypoint
         if a.ual_state not in FLYING:
             raise TaskError('not flying: take off first')
+        if self.args.get('true_height'):
+            target = a.at_true_height(target)
         start = a.position()
         # (a footprint counts only up to its roof: in front of a facade D fire, above the extension, the
         # UAV is outside and its legs are planned around the tower)
