@@ -248,7 +248,8 @@ class ExtinguishIndoorFire(AgentTask):
                     raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: {now - start:.0f} s of top-up water on '
                                     'its confirmed track, left active')
                 if flow.dry_for(now) > NO_FLOW_TIME:
-                    raise TaskError(f'no water flows: the tank level stayed at {a.water_level:.2f} L for '
+                    level = f'{flow.level:.2f} L' if flow.level is not None else 'unknown (no reading)'
+                    raise TaskError(f'no water flows: the tank level stayed at {level} for '
                                     f'{flow.dry_for(now):.0f} s with the pump on; fire {fire_id} not judged out')
                 if cold.seen_hot:
                     self.feedback('SHOOTING', f'fire {fire_id}: water {a.water_level:.2f} L')
