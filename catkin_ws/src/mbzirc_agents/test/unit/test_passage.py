@@ -15,6 +15,7 @@ from fake_backend import FakeBackend
 from fake_ual import start_uav, start_ugv, stop_agent
 from laser_world import LaserScene, wall_boxes
 from mbzirc_agents import constants as C
+from uav_abstraction_layer.msg import State
 
 # first-floor window of facade A (outer face y = 19.5, wall 19.3-19.5): x 14.5-16.5 in the arena model
 WINDOW_X, WALL_Y = 15.5, (19.3, 19.5)
@@ -162,6 +163,35 @@ def test_a_crosswind_in_the_window_does_not_stall_the_uav(uav):
     assert status == 'succeeded', s.result.message
     true_x = WINDOW_X - 1.0
     assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+
+
+
+def test_an_updraft_in_the_window_does_not_lift_the_uav_into_its_lintel(uav):
+    """Realistic seed 103: a UAV passing facade B's second-floor window hit the wall above it, 0.5 m over
+    the window's middle it had centred on. Whatever moves it up or down (an updraft here), the height it
+    centred on is kept through the window by the altimeter."""
+    agent, ual, be, scene = uav
+    wind_while_passing(agent, ual, be, scene, (0.0, 0.0, 0.12))
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    assert 6.5 + UAV_R < min(track.zs) and max(track.zs) < 8.5 - UAV_R, (min(track.zs), max(track.zs))
+
+
+def test_a_crash_in_the_window_ends_the_passage_at_once(uav):
+    """A UAL that says UNINITIALIZED (crashed) while passing: the task fails at once, no backing out
+    (seen: a crashed UAV's passage went on 'backing out' for half a minute)."""
+    agent, ual, be, scene = uav
+
+    def crash():
+        while agent.active_sub_state != 'PASSING' and not scene.stop:
+            be.clock.sleep(0.05)
+        be.clock.sleep(1.0)
+        ual.state = State.UNINITIALIZED
+    be.clock.start_thread(crash, name='crash')
+    s, status = enter(be)
+    assert status == 'aborted' and 'UNINITIALIZED' in s.result.message, s.result.message
+    assert not any('backing out' in m for m in be.warns), be.warns
 
 
 def test_a_passage_with_no_progress_backs_out_the_way_it_came(uav):

@@ -259,13 +259,21 @@ class LaserPassage:
             expected = self._centre(kind, heading, width, prior, ctl, height)
             way_in = a.position()
             try:
-                self._through(kind, heading, width, expected, ctl, start, u, length)
+                self._through(kind, heading, width, expected, ctl, start, u, length, height)
             except TaskError as e:
+                if a.ual_state == C.UAL_UNINITIALIZED:
+                    raise
                 self._back_out(kind, heading, way_in, u, e)
         finally:
             a.hold()
         a.reserve(task, 'hold', hold_box(a, a.position()))
         a.free('go_to')
+
+    def _check(self, task: AgentTask) -> None:
+        """Each control step: preemption, and a robot that crashed (its UAL UNINITIALIZED) ends the task."""
+        task.check_preempt()
+        if self.agent.ual_state == C.UAL_UNINITIALIZED:
+            raise TaskError('UAL state is UNINITIALIZED (crashed?)')
 
     def _check_jump(self, seen: SeenOpening, kind: str, allowance_speed: float) -> None:
         """TaskError when the opening's middle moved implausibly since the last scan it was seen in."""
@@ -307,6 +315,14 @@ class LaserPassage:
         dz = height - z
         return float(np.clip(VERTICAL_GAIN * dz, -VERTICAL_VMAX, VERTICAL_VMAX)), abs(dz) <= VERTICAL_TOLERANCE
 
+    def _keep_height(self, height: Optional[float]) -> float:
+        """vz back to height (true) by a fresh altimeter estimate; 0 without one (never by the GNSS height
+        alone: in the opening the altimeter sees the sill and the estimate lapses, the GNSS height is off)."""
+        z = self.height_now() if height is not None else None
+        if z is None:
+            return 0.0
+        return float(np.clip(VERTICAL_GAIN * (height - z), -VERTICAL_VMAX, VERTICAL_VMAX))
+
     def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
                 height: Optional[float] = None) -> float:
         """Find the opening and centre on it (and, a window with the altimeter, on its middle height);
@@ -317,7 +333,7 @@ class LaserPassage:
         allowed = a.p.opening_timeout            # + the time to slide to an opening first seen far aside
         centred = 0
         while True:
-            task.check_preempt()
+            self._check(task)
             if a.backend.now() - t0 > allowed:
                 why = ('the laser is blind' if self._blind_since is not None else
                        'no scan' if self._fresh_scan() is None else
@@ -351,8 +367,10 @@ class LaserPassage:
             a.backend.sleep(dt)
 
     def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
-                 start: np.ndarray, u: np.ndarray, length: float) -> None:
-        """Forward until `length` m along u from start, centred on the opening while its edges are seen."""
+                 start: np.ndarray, u: np.ndarray, length: float, height: Optional[float] = None) -> None:
+        """Forward until `length` m along u from start, centred on the opening while its edges are seen,
+        and (a UAV) at the height it centred on while the altimeter gives a fresh estimate (the GNSS
+        height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame)."""
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
         nominal = length / max(0.1, ctl.speed)
@@ -364,7 +382,7 @@ class LaserPassage:
         p0 = a.position()
         wall_end = (self._last[0].distance if self._last is not None else 0.0) + WALL_PASSED
         while True:
-            task.check_preempt()
+            self._check(task)
             p = a.position()
             done = float(np.dot(p[:3] - start[:3], u))
             if done >= length - a.p.position_tolerance:
@@ -399,7 +417,7 @@ class LaserPassage:
                     room = 0.5 * (left + right) - a.p.opening_keep_off
             task.feedback('PASSING', f'through the {kind}: {length - done:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside'))
-            self._command(ctl.through(lateral, room), heading, msg)
+            self._command(ctl.through(lateral, room), heading, msg, self._keep_height(height))
             a.backend.sleep(dt)
 
     def _back_out(self, kind: str, heading: float, way_in: np.ndarray, u: np.ndarray, why: TaskError) -> None:
@@ -415,7 +433,7 @@ class LaserPassage:
         t0 = a.backend.now()
         limit = depth / max(0.1, a.p.opening_speed) + a.p.opening_timeout
         while True:
-            task.check_preempt()
+            self._check(task)
             p = a.position()
             left = float(np.dot(p[:3] - way_in[:3], u))
             if left <= a.p.position_tolerance:
