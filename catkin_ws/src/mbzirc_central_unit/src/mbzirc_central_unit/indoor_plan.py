@@ -31,6 +31,10 @@ DEFAULT_INDOOR_HOLDERS = [  # (x, y, z, normal x, normal y)
 # UAV into facade B under realistic uncertainty, seed 101); the agent then centres on the window by laser
 WINDOW_STANDOFF = 2.0
 WINDOW_DEPTH = 1.5      # m inside the window after enter_building (the agents' ~entry_depth 3.5 - standoff)
+# m inside the window where a UAV leaving through it starts its passage: the move there flies on GNSS, a
+# metre off, and WINDOW_DEPTH left 1.1 m between its sphere and the wall (realistic seed 103: a UAV hit
+# facade C's inner face above its window, 1 m past that point)
+EXIT_DEPTH = 2.5
 HOLDER_VIEW = 2.0       # m in front of an indoor holder to look at it
 
 
@@ -41,6 +45,14 @@ class Room:
     entry: Pose            # outside the window, facing in (the enter_building goal)
     inner: Point           # just inside the window
     path: list[Pose]       # viewpoints inside, facing the indoor holders they cover
+
+    @property
+    def exit_start(self) -> Point:
+        """EXIT_DEPTH inside the window, on its normal (inner and entry lie on it)."""
+        dx, dy = self.entry[0] - self.inner[0], self.entry[1] - self.inner[1]
+        n = math.hypot(dx, dy)
+        k = (EXIT_DEPTH - WINDOW_DEPTH) / n if n > 1e-9 else 0.0
+        return (self.inner[0] - k * dx, self.inner[1] - k * dy, self.inner[2])
 
     def sees(self, p: Point, walls: list[Rect]) -> bool:
         """True if a straight line from the room's inner point or viewpoints reaches p without a wall

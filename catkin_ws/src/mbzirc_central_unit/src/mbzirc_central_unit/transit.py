@@ -96,10 +96,11 @@ class Router:
         e = room.entry
         back = e[3] + math.pi  # face out while leaving
         # One waypoint per goal: the agents' search_indoor stops at the first waypoint where it knows a
-        # fire of the floor, so a longer path could end inside. First to the point inside the window,
-        # then straight out through it.
-        if math.dist(a.position, room.inner) > 0.6:
-            return [(*room.inner, back)]
+        # fire of the floor, so a longer path could end inside. First to the point inside the window
+        # where the way out starts, then straight out through it.
+        start = room.exit_start
+        if math.dist(a.position, start) > 0.6:
+            return [(*start, back)]
         return [(e[0], e[1], e[2], back)]
 
     def go_home(self, a: AgentView, reason: str) -> Command:

@@ -1,6 +1,8 @@
 """The C3 strategy: assignment, refill and reassignment, first floor last, silent agents, restart."""
 import math
 
+import pytest
+
 from mbzirc_arena import c3
 from fake_mission import FakeMission, TRUE_FIRES
 
@@ -282,11 +284,23 @@ def test_exit_from_the_building_is_one_straight_waypoint_at_a_time():
                   last_seen=0.0)
     cmd = s.decide(WorldView(0.0, {"2": a}, {}))[0]
     assert cmd.task == C.SEARCH_INDOOR and len(cmd.goal["path"]) == 1
-    assert math.dist(cmd.goal["path"][0][:3], room.inner) < 1e-6
+    assert math.dist(cmd.goal["path"][0][:3], room.exit_start) < 1e-6
     s.on_result(cmd, True)
-    a.x, a.y, a.z = room.inner
+    a.x, a.y, a.z = room.exit_start
     cmd = s.decide(WorldView(1.0, {"2": a}, {}))[0]
     assert cmd.task == C.SEARCH_INDOOR and math.dist(cmd.goal["path"][0][:3], room.entry[:3]) < 1e-6
+
+
+def test_the_way_out_starts_deeper_inside_than_the_way_in_ended():
+    """Realistic seed 103: the move to 1.5 m inside facade C's window, a metre off on GNSS, put a leaving
+    UAV into the wall's inner face. The way out starts 2.5 m inside, on the window's normal."""
+    from mbzirc_central_unit.indoor_plan import EXIT_DEPTH, WINDOW_DEPTH
+    for rooms in Strategy().p.layout.rooms.values():
+        for room in rooms:
+            wall_to_entry = math.dist(room.inner[:2], room.entry[:2])       # WINDOW_DEPTH + the standoff
+            assert math.dist(room.exit_start[:2], room.entry[:2]) == pytest.approx(
+                wall_to_entry + EXIT_DEPTH - WINDOW_DEPTH)
+            assert math.dist(room.exit_start[:2], room.inner[:2]) == pytest.approx(EXIT_DEPTH - WINDOW_DEPTH)
 
 
 def test_a_uav_that_flew_and_is_uninitialized_again_has_crashed():
