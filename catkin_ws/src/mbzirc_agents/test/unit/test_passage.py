@@ -166,6 +166,30 @@ def test_a_crosswind_in_the_window_does_not_stall_the_uav(uav):
 
 
 
+
+def test_a_gust_where_the_edges_are_neither_ahead_nor_beside_is_corrected(uav):
+    """Realistic seed 105: a UAV entering facade D's window hit its frame 0.67 m off the middle, pushed by
+    gusts in the last metre before the wall while the laser gave it no edge (not ahead, not beside), and
+    nothing steered it. Here the frame gives no return at all in that metre and a gust blows along the
+    wall: the middle where it was last sensed is kept, by the robot's own motion since."""
+    agent, ual, be, scene = uav
+    cast = scene.ranges
+
+    def no_edges_near_the_wall():                 # the frame's edges (dark, grazing) give no return
+        r = cast()
+        if agent.active_sub_state == 'PASSING' and ual.pos[1] < WALL_Y[1] + 1.2:
+            r[120:601] = np.inf                      # from 120 deg left to 120 deg right of the front
+        return r
+    scene.ranges = no_edges_near_the_wall
+    wind_while_passing(agent, ual, be, scene, (0.3, 0.0, 0.0),
+                       where=lambda pos: WALL_Y[0] < pos[1] < WALL_Y[1] + 1.2)
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    true_x = WINDOW_X - 1.0
+    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+
+
 def test_an_updraft_in_the_window_does_not_lift_the_uav_into_its_lintel(uav):
     """Realistic seed 103: a UAV passing facade B's second-floor window hit the wall above it, 0.5 m over
     the window's middle it had centred on. Whatever moves it up or down (an updraft here), the height it

@@ -381,6 +381,9 @@ class LaserPassage:
         # then are in walls beyond (across the room: a window behind a doorway), never this one
         p0 = a.position()
         wall_end = (self._last[0].distance if self._last is not None else 0.0) + WALL_PASSED
+        # a point of the opening's middle line (arena frame) where it was last sensed: centred on it
+        middle = (None if self._last is None else
+                  np.asarray(body_to_world((0.0, self._last[0].lateral, 0.0), p0[3]))[:2] + p0[:2])
         while True:
             self._check(task)
             p = a.position()
@@ -409,12 +412,20 @@ class LaserPassage:
                 self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
                 lateral = expected = seen.lateral
                 room = seen.width / 2 - a.p.opening_keep_off
+                middle = np.asarray(body_to_world((0.0, lateral, 0.0), p[3]))[:2] + p[:2]
             elif not passed:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     # its edges beside the robot: keep to the middle
                     lateral = self._as_now(msg, 0.0, 0.5 * (left - right))[1]
                     room = 0.5 * (left + right) - a.p.opening_keep_off
+                    middle = np.asarray(body_to_world((0.0, lateral, 0.0), p[3]))[:2] + p[:2]
+                elif middle is not None:
+                    # between the two (edges too near ahead, not yet beside): the middle where it was last
+                    # sensed, by the robot's own motion since (gusts push it there: seen, 0.67 m off into
+                    # facade D's window frame, realistic seed 105)
+                    lateral = float(world_to_body((middle[0] - p[0], middle[1] - p[1], 0.0), p[3])[1])
+                    room = width / 2 - a.p.opening_keep_off
             task.feedback('PASSING', f'through the {kind}: {length - done:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside'))
             self._command(ctl.through(lateral, room), heading, msg, self._keep_height(height))
