@@ -2,7 +2,7 @@
 maps, and the map files at the end (issue 18).
 
 Subscribed per robot: `localization/source` and `localization/pose` (indoor_localization), `slam_out_pose`
-(hector_mapping: paired by stamp with `localization/pose`, it gives the anchor arena <- `<ns>/map` without
+(hector_mapping: paired by stamp with `localization/pose`, in whichever order they come, it gives the anchor arena <- `<ns>/map` without
 reading /tf, which ual_sim fills at every tick); `/sim/robots` (truth, 2 Hz, in the order of `/sim/robot_ids`).
 The maps are not subscribed (a 2048 x 2048 grid of 4 MB that hector_mapping would then build and send every
 2 s per robot): each SLAM robot that has been indoors (or on `slam`) is asked for its map (`dynamic_map`,
@@ -30,7 +30,7 @@ from .indoor_flights import SlamRecord, anchor_from_pair
 from .slam_maps import Grid, GridError, grid_from_message, map_entry, place, write_map_server
 
 THROTTLE_S = 10.0
-RECENT_SLAM_POSES = 20        # slam_out_poses kept per robot to find the one a localization/pose was made of
+RECENT_SLAM_POSES = 20        # poses kept per robot and frame waiting for the other one of their stamp
 __all__ = ["SlamInputs"]
 
 
@@ -73,8 +73,9 @@ class SlamInputs:
                  arena_frame: str = "arena") -> None:
         self.slam, self.lock, self.arena_frame = slam, lock, arena_frame
         self.grids: dict[str, tuple] = {}                  # robot -> (Grid, frame)
-        self.recent: dict[str, dict[float, tuple]] = {}    # robot -> {stamp: (x, y, yaw)} of slam_out_pose
+        self.recent: dict[tuple, dict[float, tuple]] = {}  # (robot, "map" | "arena") -> {stamp: (x, y, yaw)}
         self.truth_ids: Optional[list] = None
+        self.anchor_t: dict[str, float] = {}               # robot -> stamp of its newest anchor
         self.fetch_lock = threading.Lock()
         self.subs = []
         for rid in robot_ids:
@@ -97,10 +98,7 @@ class SlamInputs:
             rospy.logwarn_throttle(THROTTLE_S, f"mission_recorder: non-finite slam_out_pose of robot {robot} ignored")
             return
         with self.lock:
-            recent = self.recent.setdefault(robot, {})
-            recent[pose[0]] = (pose[1], pose[2], pose[4])
-            while len(recent) > RECENT_SLAM_POSES:
-                del recent[min(recent)]
+            self._pair(robot, pose[0], "map", (pose[1], pose[2], pose[4]))
 
     def _on_pose(self, msg: PoseStamped, robot: str) -> None:
         pose = _pose(msg)
@@ -111,9 +109,23 @@ class SlamInputs:
         t, x, y, z, yaw = pose
         with self.lock:
             self.slam.add_pose(robot, t, x, y, z)
-            in_map = self.recent.get(robot, {}).get(t)       # the SLAM pose it was anchored from
-            if in_map is not None:
-                self.slam.anchors[robot] = anchor_from_pair((x, y, yaw), in_map)
+            self._pair(robot, t, "arena", (x, y, yaw))
+
+    def _pair(self, robot: str, t: float, frame: str, pose: tuple) -> None:
+        """Keep a pose of `robot` at stamp t in `frame` ("map": slam_out_pose, "arena": localization/pose);
+        with the other one of the same stamp (the SLAM pose a localization/pose was anchored from), whichever
+        came first, it updates the robot's anchor. With the lock held."""
+        other = self.recent.setdefault((robot, "arena" if frame == "map" else "map"), {}).pop(t, None)
+        if other is None:
+            recent = self.recent.setdefault((robot, frame), {})
+            recent[t] = pose
+            while len(recent) > RECENT_SLAM_POSES:
+                del recent[min(recent)]
+            return
+        if t >= self.anchor_t.get(robot, -math.inf):
+            in_arena, in_map = (pose, other) if frame == "arena" else (other, pose)
+            self.slam.anchors[robot] = anchor_from_pair(in_arena, in_map)
+            self.anchor_t[robot] = t
 
     def _on_truth(self, msg: PoseArray) -> None:
         if self.truth_ids is None:
@@ -170,6 +182,7 @@ class SlamInputs:
         with self.lock:
             floors = self.slam.map_floors(t_end, floor_of)
             anchors = dict(self.slam.anchors)
+            anchor_t = dict(self.anchor_t)
             grids = dict(self.grids)
         by_floor: dict[int, list] = {}
         for robot, floor in sorted(floors.items()):
@@ -188,6 +201,9 @@ class SlamInputs:
             stem = f"map_floor{floor}"
             write_map_server(m, out_dir, stem)
             maps[floor] = m
-            entries.append(map_entry(floor, [robot for robot, _, _ in items], stem, m))
+            entry = map_entry(floor, [robot for robot, _, _ in items], stem, m)
+            entry["anchors"] = {robot: {"pose": [round(v, 3) for v in anchor], "t": anchor_t.get(robot)}
+                                for robot, _, anchor in items}      # where each grid was placed from
+            entries.append(entry)
         return entries, maps
 

@@ -27,7 +27,7 @@ def inputs(monkeypatch):
     monkeypatch.setattr(S.rospy, "logwarn", warnings.append)
     si = S.SlamInputs.__new__(S.SlamInputs)                 # its callbacks without its ROS set-up
     si.slam, si.lock, si.arena_frame = SlamRecord(), threading.Lock(), "arena"
-    si.grids, si.recent, si.truth_ids = {}, {}, None
+    si.grids, si.recent, si.truth_ids, si.anchor_t = {}, {}, None, {}
     si.warnings = warnings
     return si
 
@@ -62,7 +62,7 @@ def test_non_finite_poses_and_a_truth_of_the_wrong_size_are_ignored(inputs):
     inputs._on_source(SimpleNamespace(data="slam"), "2")
     inputs._on_pose(pose_msg(1.0, math.nan, 0.0, 5.0), "2")
     inputs._on_slam_pose(pose_msg(1.0, 0.0, math.inf, 0.0), "2")
-    assert len(inputs.warnings) == 2 and not inputs.slam.poses.get("2") and not inputs.recent.get("2")
+    assert len(inputs.warnings) == 2 and not inputs.slam.poses.get("2") and not inputs.recent.get(("2", "map"))
     inputs._on_truth(SimpleNamespace(header=SimpleNamespace(stamp=SimpleNamespace(to_sec=lambda: 1.0)),
                                      poses=[pose_msg(0, 1, 2, 3).pose] * 3))        # 4 robot ids
     assert "/sim/robots has 3 poses" in inputs.warnings[-1] and not inputs.slam.truth
@@ -76,10 +76,23 @@ def fly(inputs, robot, floor, anchor, t0=10.0):
     for k in range(150):
         t, mx, my = t0 + k / 15, 0.1 * k / 15, 0.0
         ax, ay = anchor[0] + c * mx - s * my, anchor[1] + s * mx + c * my
-        inputs._on_slam_pose(pose_msg(t, mx, my, 0.0), robot)
-        inputs._on_pose(pose_msg(t, ax, ay, Z[floor], anchor[2]), robot)
+        calls = [lambda: inputs._on_slam_pose(pose_msg(t, mx, my, 0.0), robot),
+                 lambda: inputs._on_pose(pose_msg(t, ax, ay, Z[floor], anchor[2]), robot)]
+        for call in calls if k % 2 else calls[::-1]:    # the two topics come in either order
+            call()
         if k % 7 == 0:
             inputs.slam.add_truth(robot, t, ax + 0.05, ay, Z[floor])
+
+
+def test_the_anchor_is_the_newest_pair_whichever_topic_comes_first(inputs):
+    inputs._on_source(SimpleNamespace(data="gnss"), "2")
+    inputs._on_pose(pose_msg(2.0, 11.0, 5.0, 6.0, math.pi / 2), "2")          # anchored pose first
+    inputs._on_slam_pose(pose_msg(1.0, 0.0, 0.0, 0.0), "2")                   # an unpaired SLAM pose
+    assert "2" not in inputs.slam.anchors
+    inputs._on_slam_pose(pose_msg(2.0, 1.0, 0.0, 0.0), "2")                   # its SLAM pose after it
+    assert inputs.slam.anchors["2"] == pytest.approx((11.0, 4.0, math.pi / 2))
+    inputs._on_pose(pose_msg(1.0, 0.0, 0.0, 6.0, 0.0), "2")                   # a late pair: older, ignored
+    assert inputs.slam.anchors["2"] == pytest.approx((11.0, 4.0, math.pi / 2)) and inputs.anchor_t["2"] == 2.0
 
 
 def test_each_floor_map_is_written_where_the_anchor_puts_it(inputs, tmp_path):
@@ -90,6 +103,7 @@ def test_each_floor_map_is_written_where_the_anchor_puts_it(inputs, tmp_path):
     inputs.accept_map("0", grid_msg())
     entries, maps = inputs.write_maps(str(tmp_path), 30.0, ARENA.floor_of)
     assert [(e["floor"], e["robots"]) for e in entries] == [(1, ["2"]), (2, ["0"])]
+    assert entries[0]["anchors"]["2"]["pose"] == pytest.approx([20.0, 10.0, math.pi / 2], abs=1e-3)
     m1 = read_map_server(str(tmp_path / "map_floor1.yaml"))
     # robot 2's wall at map y = 1.05 turned by 90 deg about (20, 10): arena x = 18.95, y from 8 to 12
     col = int((18.95 - m1.origin[0]) / m1.resolution)
