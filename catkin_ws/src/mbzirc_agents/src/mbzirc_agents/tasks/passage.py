@@ -381,6 +381,10 @@ class LaserPassage:
         # then are in walls beyond (across the room: a window behind a doorway), never this one
         p0 = a.position()
         wall_end = (self._last[0].distance if self._last is not None else 0.0) + WALL_PASSED
+        # not done before the robot is clear of the wall by the laser's measure (its distance when centred),
+        # whatever `length` says on GNSS: a GNSS error along the way ended a UGV's doorway passage in the
+        # doorway and the next leg dragged it into the frame (realistic seed 105)
+        clear = wall_end + a.p.opening_keep_off if self._last is not None else 0.0
         # a point of the opening's middle line (arena frame) where it was last sensed: centred on it
         middle = (None if self._last is None else
                   np.asarray(body_to_world((0.0, self._last[0].lateral, 0.0), p0[3]))[:2] + p0[:2])
@@ -388,14 +392,16 @@ class LaserPassage:
             self._check(task)
             p = a.position()
             done = float(np.dot(p[:3] - start[:3], u))
-            if done >= length - a.p.position_tolerance:
+            gone = float(np.dot(p[:3] - p0[:3], u))
+            if done >= length - a.p.position_tolerance and gone >= clear:
                 return                               # there, as a go-to is (seen: 'not through, 0.0 m left')
-            passed = float(np.dot(p[:3] - p0[:3], u)) > wall_end
+            passed = gone > wall_end
+            to_go = max(length - done, clear - gone)
             now = a.backend.now()
             if done > best + PROGRESS_STEP:
                 best, best_t = done, now
             if now - best_t > a.p.opening_timeout or now - t0 > timeout:
-                raise TaskError(f'not through the {kind} after {now - t0:.0f} s ({length - done:.1f} m left, '
+                raise TaskError(f'not through the {kind} after {now - t0:.0f} s ({to_go:.1f} m left, '
                                 f'no progress for {now - best_t:.0f} s)')
             msg = self._fresh_scan()
             if msg is None:
@@ -426,7 +432,7 @@ class LaserPassage:
                     # facade D's window frame, realistic seed 105)
                     lateral = float(world_to_body((middle[0] - p[0], middle[1] - p[1], 0.0), p[3])[1])
                     room = width / 2 - a.p.opening_keep_off
-            task.feedback('PASSING', f'through the {kind}: {length - done:.1f} m to go'
+            task.feedback('PASSING', f'through the {kind}: {to_go:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside'))
             self._command(ctl.through(lateral, room), heading, msg, self._keep_height(height))
             a.backend.sleep(dt)
