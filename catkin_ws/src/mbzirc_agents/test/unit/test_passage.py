@@ -346,6 +346,30 @@ def test_indoor_search_legs_are_flown_at_true_heights(uav, bias_z):
     assert abs(ual.pos[2] - 6.5) < 0.2, f'true height {ual.pos[2]:.2f}, GNSS error {bias_z:+.1f}'
 
 
+
+def test_going_down_to_a_legs_height_ends_at_the_height_whatever_the_wobble(uav):
+    """Ideal seed 16: near the tower's first floor gusts hold a UAV a few tenths of a metre off its
+    set-point; the descent to a search leg's height before looking for a doorway waited for the horizontal
+    error too and aborted the search ('not there after 21 s (0.4 m left)'). Here the pose reads 0.4 m off
+    sideways during the descent: it ends once at the height."""
+    agent, ual, be, scene = uav
+    ual.pos = np.array([22.7, 14.5, 7.5])
+    ual.yaw = math.pi
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+
+    def wobble():
+        while not scene.stop:
+            descending = "down to the leg's height" in agent.active_message
+            ual.gnss_offset = np.array([0.0, 0.4 if descending else 0.0, 0.0])
+            be.clock.sleep(0.05)
+    be.clock.start_thread(wobble, name='wobble')
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=1, path=[pose(20.5, 14.5, 6.5, math.pi)]))
+    assert s.wait(200) == 'succeeded', s.result.message
+    assert abs(ual.pos[2] - 6.5) < 0.2 and abs(ual.pos[0] - 20.5) < 0.3, ual.pos
+
+
 def test_the_passage_reserves_the_way_aside_to_the_opening():
     """The airspace reserved for a passage holds the sideways move to the opening (3.5 m here) too."""
     from mbzirc_agents.tasks.passage import passage_box
