@@ -80,11 +80,7 @@ def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav, z_shift):
     brings it to the window's middle height."""
     agent, ual, be, scene = uav
     scene.z_shift = z_shift
-    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
-    s, status = enter(be)
-    assert status == 'succeeded', s.result.message
-    true_x = WINDOW_X - 1.0
-    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+    track = enter_inside_the_window(be, ual)
     zs = [z - z_shift for z in track.zs]                      # in the world's frame
     assert 6.5 + UAV_R < min(zs) and max(zs) < 8.5 - UAV_R, (min(zs), max(zs))
     assert ual.pos[1] < WALL_Y[0] - UAV_R, f'not inside: {ual.pos}'
@@ -135,6 +131,17 @@ def test_a_window_that_jumps_aborts_the_passage(uav):
 
 
 
+def enter_inside_the_window(be, ual):
+    """enter_building, succeeded, its true track crossing the wall inside the window (true x 13.5-15.5:
+    the uav fixture's world) by the UAV's radius; the Track."""
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    true_x = WINDOW_X - 1.0
+    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+    return track
+
+
 def wind_while_passing(agent, ual, be, scene, velocity, where=lambda pos: True):
     """A steady wind (m/s, world x y z) that moves the UAV's true position while its passage is PASSING
     and where(true position): the gusts ual_sim blows near the tower's first floor, where its windows are,
@@ -158,13 +165,7 @@ def test_a_crosswind_in_the_window_does_not_stall_the_uav(uav):
     true track stays inside the window by its radius."""
     agent, ual, be, scene = uav
     wind_while_passing(agent, ual, be, scene, (0.3, 0.0, 0.0))
-    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
-    s, status = enter(be)
-    assert status == 'succeeded', s.result.message
-    true_x = WINDOW_X - 1.0
-    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
-
-
+    enter_inside_the_window(be, ual)
 
 
 def test_a_gust_where_the_edges_are_neither_ahead_nor_beside_is_corrected(uav):
@@ -183,11 +184,7 @@ def test_a_gust_where_the_edges_are_neither_ahead_nor_beside_is_corrected(uav):
     scene.ranges = no_edges_near_the_wall
     wind_while_passing(agent, ual, be, scene, (0.3, 0.0, 0.0),
                        where=lambda pos: WALL_Y[0] < pos[1] < WALL_Y[1] + 1.2)
-    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
-    s, status = enter(be)
-    assert status == 'succeeded', s.result.message
-    true_x = WINDOW_X - 1.0
-    assert track.within(true_x - 1.0 + UAV_R, true_x + 1.0 - UAV_R), (min(track.xs), max(track.xs))
+    enter_inside_the_window(be, ual)
 
 
 def test_an_updraft_in_the_window_does_not_lift_the_uav_into_its_lintel(uav):
@@ -196,9 +193,7 @@ def test_an_updraft_in_the_window_does_not_lift_the_uav_into_its_lintel(uav):
     centred on is kept through the window by the altimeter."""
     agent, ual, be, scene = uav
     wind_while_passing(agent, ual, be, scene, (0.0, 0.0, 0.12))
-    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
-    s, status = enter(be)
-    assert status == 'succeeded', s.result.message
+    track = enter_inside_the_window(be, ual)
     assert 6.5 + UAV_R < min(track.zs) and max(track.zs) < 8.5 - UAV_R, (min(track.zs), max(track.zs))
 
 
