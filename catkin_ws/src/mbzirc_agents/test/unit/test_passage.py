@@ -108,6 +108,20 @@ def test_no_window_seen_holds_and_fails(uav):
     assert ual.pos[1] > WALL_Y[1] + UAV_R                     # still outside, in front of the wall
 
 
+
+def test_a_window_narrower_than_the_uav_can_pass_is_not_entered(uav):
+    """Bad input (issue 18): the window truly 1.0 m wide (the arena model says 2 m; the UAV is 0.7 m across
+    and keeps ~opening_keep_off from returns): not taken for the window, the UAV holds outside and fails."""
+    import dataclasses
+    from mbzirc_arena.c3 import ARENA
+    agent, ual, be, scene = uav
+    narrow = [dataclasses.replace(o, width=1.0) for o in ARENA.openings]
+    scene.boxes = lambda z: wall_boxes(z, shift=(-1.0, 0.0), openings=narrow)
+    s, status = enter(be)
+    assert status == 'aborted' and 'no window 2.0 m wide' in s.result.message, s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R                     # still outside, in front of the wall
+
+
 def test_a_blind_laser_holds_and_fails(uav):
     agent, ual, be, scene = uav
     scene.blind = True
