@@ -357,6 +357,27 @@ def test_an_indoor_fire_estimated_slightly_into_its_wall_is_put_out_from_the_roo
     assert not layout.clear_indoors(1, east[:3], fire.position)
 
 
+
+def test_an_indoor_fire_estimated_past_its_walls_middle_is_not_flown_to_through_the_wall():
+    """Realistic seed 103: fire in2_w (west face of the interior wall x 17.7-17.9) estimated 5 cm past the
+    wall's middle line, as if on the east face: UAVs in the east room were sent to its viewpoint, west of
+    the wall, by a straight leg through the wall. The fire's side is its viewpoint's: the UAV goes round,
+    out of the east room, to the west room's window."""
+    s = Strategy()
+    layout = s.p.layout
+    west, east = layout.rooms[2][0], layout.rooms[2][1]
+    fire = FireView(43, 17.85, 8.5, 11.5, C.KIND_INDOOR)
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *east.path[0][:3], ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    assert layout.clear_indoors(2, a.position, fire.position)             # the estimate looks in sight
+    assert not layout.clear_indoors(2, a.position, west.path[0][:3])      # its viewpoint is not
+    cmd = s.decide(WorldView(0.0, {"2": a}, {43: fire}))[0]
+    legs = cmd.goal.get("path", [])
+    assert cmd.task != C.EXTINGUISH_INDOOR_FIRE, cmd
+    assert all(layout.clear_indoors(2, a.position, p[:3]) for p in legs[:1]), (cmd.reason, legs)
+    assert "leaving" in cmd.reason or cmd.target[0] == "exit" or "window" in cmd.reason, cmd.reason
+
+
 def test_an_indoor_fire_is_put_out_from_its_viewpoint_not_from_the_window():
     """Inside the room but at the window: first to the viewpoint in front of the holder (water along the
     wall's normal), then extinguish from there."""
