@@ -211,6 +211,27 @@ def test_an_updraft_in_the_window_does_not_lift_the_uav_into_its_lintel(uav):
     assert 6.5 + UAV_R < min(track.zs) and max(track.zs) < 8.5 - UAV_R, (min(track.zs), max(track.zs))
 
 
+
+def test_a_passage_ends_clear_of_the_wall_whatever_the_gnss_error_does_meanwhile(uav):
+    """Realistic seed 101: in through facade B's window, a UAV was truly 0.33 m off the wall's inner face
+    when its passage ended (progress is measured on GNSS, whose error moved meanwhile) and hit the wall
+    going down to its search height. Here the entry is asked only 2 m deep (0.3 m past the inner face) and
+    the GNSS error moves 0.5 m inwards while the UAV goes through: it still ends clear of the wall."""
+    agent, ual, be, scene = uav
+    agent.p.entry_depth = 2.0
+
+    def drift():
+        while agent.active_sub_state != 'PASSING' and not scene.stop:
+            be.clock.sleep(0.05)
+        for k in range(50):                                  # -0.5 m along y (inwards) over 5 s
+            ual.gnss_bias = np.array([0.0, -0.01 * (k + 1), 0.0])
+            be.clock.sleep(0.1)
+    be.clock.start_thread(drift, name='drift')
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    assert ual.pos[1] < WALL_Y[0] - UAV_R - 0.3, f'{WALL_Y[0] - ual.pos[1]:.2f} m off the inner face'
+
+
 def test_a_crash_in_the_window_ends_the_passage_at_once(uav):
     """A UAL that says UNINITIALIZED (crashed) while passing: the task fails at once, no backing out
     (seen: a crashed UAV's passage went on 'backing out' for half a minute)."""
