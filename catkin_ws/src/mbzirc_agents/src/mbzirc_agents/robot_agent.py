@@ -416,13 +416,17 @@ class RobotAgent(Agent):
                     return False
                 if self.backend.now() > end:
                     raise TaskError(f'{what}: not there after {timeout:.0f} s ({dxy:.1f} m left)')
-                if self.ual_state == C.UAL_UNINITIALIZED:
-                    raise TaskError(f'{what}: UAL state is UNINITIALIZED (crashed?)')
+                self.raise_if_crashed(what)
                 task.feedback('MOVING', f'{what}: {math.hypot(dxy, dz):.1f} m to go')
                 self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
         except TaskPreempted:
             self.hold()
             raise
+
+    def raise_if_crashed(self, what: str = '') -> None:
+        """TaskError when the UAL says UNINITIALIZED: the robot crashed, no task may go on commanding it."""
+        if self.ual_state == C.UAL_UNINITIALIZED:
+            raise TaskError(f'{what + ": " if what else ""}UAL state is UNINITIALIZED (crashed?)')
 
     def set_point_z(self, target: Sequence[float]) -> float:
         """The z a go-to to target is flown to (a UAV's clearance guard may raise it)."""

@@ -68,6 +68,16 @@ def passage_box(start, end, heading: float, aside: float, margin: float) -> tupl
     return np.minimum(lo, lo2), np.maximum(hi, hi2)
 
 
+def _vz_towards(height: float, z: float) -> float:
+    """Vertical velocity (m/s) from true height z towards height (a window's middle, a doorway leg's)."""
+    return float(np.clip(VERTICAL_GAIN * (height - z), -VERTICAL_VMAX, VERTICAL_VMAX))
+
+
+def _middle_point(pose, lateral: float) -> np.ndarray:
+    """Arena (x, y) of the point `lateral` m aside (body y) of the robot at pose: on an opening's middle line."""
+    return np.asarray(body_to_world((0.0, lateral, 0.0), pose[3]))[:2] + np.asarray(pose[:2])
+
+
 def crosses_outline(a, b) -> bool:
     """True when the straight leg a -> b goes from outside a building's outline to inside or back."""
     return in_footprint(a, standing_at(a, C.BUILDINGS)) != in_footprint(b, standing_at(b, C.BUILDINGS))
@@ -279,8 +289,7 @@ class LaserPassage:
     def _check(self, task: AgentTask) -> None:
         """Each control step: preemption, and a robot that crashed (its UAL UNINITIALIZED) ends the task."""
         task.check_preempt()
-        if self.agent.ual_state == C.UAL_UNINITIALIZED:
-            raise TaskError('UAL state is UNINITIALIZED (crashed?)')
+        self.agent.raise_if_crashed()
 
     def _check_jump(self, seen: SeenOpening, kind: str, allowance_speed: float) -> None:
         """TaskError when the opening's middle moved implausibly since the last scan it was seen in."""
@@ -319,16 +328,13 @@ class LaserPassage:
             self.agent.backend.logerr_throttle(5.0, f'[{self.task.name}] no usable altimeter estimate: the '
                                                     'opening is passed at the GNSS height')
             z = float(self.agent.position()[2])
-        dz = height - z
-        return float(np.clip(VERTICAL_GAIN * dz, -VERTICAL_VMAX, VERTICAL_VMAX)), abs(dz) <= VERTICAL_TOLERANCE
+        return _vz_towards(height, z), abs(height - z) <= VERTICAL_TOLERANCE
 
     def _keep_height(self, height: Optional[float]) -> float:
         """vz back to height (true) by a fresh altimeter estimate; 0 without one (never by the GNSS height
         alone: in the opening the altimeter sees the sill and the estimate lapses, the GNSS height is off)."""
         z = self.height_now() if height is not None else None
-        if z is None:
-            return 0.0
-        return float(np.clip(VERTICAL_GAIN * (height - z), -VERTICAL_VMAX, VERTICAL_VMAX))
+        return 0.0 if z is None else _vz_towards(height, z)
 
     def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
                 height: Optional[float] = None) -> float:
@@ -396,8 +402,7 @@ class LaserPassage:
         wall = (float(np.dot(p0[:3] - start[:3], u)) + self._last[0].distance) if self._last is not None else None
         beyond = WALL_PASSED + a.p.opening_keep_off + GNSS_DRIFT_MARGIN      # past the wall's face: clear
         # a point of the opening's middle line (arena frame) where it was last sensed: centred on it
-        middle = (None if self._last is None else
-                  np.asarray(body_to_world((0.0, self._last[0].lateral, 0.0), p0[3]))[:2] + p0[:2])
+        middle = None if self._last is None else _middle_point(p0, self._last[0].lateral)
         while True:
             self._check(task)
             p = a.position()
@@ -428,7 +433,7 @@ class LaserPassage:
                 self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
                 lateral = expected = seen.lateral
                 room = seen.width / 2 - a.p.opening_keep_off
-                middle = np.asarray(body_to_world((0.0, lateral, 0.0), p[3]))[:2] + p[:2]
+                middle = _middle_point(p, lateral)
                 wall = done + seen.distance
             elif done < clear_at:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
@@ -436,7 +441,7 @@ class LaserPassage:
                     # its edges beside the robot: keep to the middle
                     lateral = self._as_now(msg, 0.0, 0.5 * (left - right))[1]
                     room = 0.5 * (left + right) - a.p.opening_keep_off
-                    middle = np.asarray(body_to_world((0.0, lateral, 0.0), p[3]))[:2] + p[:2]
+                    middle = _middle_point(p, lateral)
                 elif middle is not None:
                     # between the two (edges too near ahead, not yet beside): the middle where it was last
                     # sensed, by the robot's own motion since (gusts push it there: seen, 0.67 m off into

@@ -226,7 +226,7 @@ class GoHomeAndRefill(AgentTask):
             refilled, what = (lambda: a.water_level >= full), 'the tank to be refilled'
         else:
             refilled, what = (lambda: a.blanket_attached), 'a new blanket'
-        for attempt in range(max(0, int(a.p.reland_attempts))):
+        for attempt in range(a.p.reland_attempts):
             self.feedback('REFILLING', 'waiting for the reset (water / blanket)')
             try:
                 self.wait_for(refilled, a.p.reland_after, what)
