@@ -1,6 +1,6 @@
 """ColdConfirmation: when a water task may stop pumping."""
 from mbzirc_agents import constants as C
-from mbzirc_agents.tasks.cold_check import ColdConfirmation, WaterFlow, dry_tank_verdict
+from mbzirc_agents.tasks.cold_check import NO_FLOW_TIME, ColdConfirmation, WaterFlow, dry_tank_verdict
 
 
 def test_cold_needs_hot_first_then_consecutive_colds():
@@ -43,6 +43,17 @@ def test_water_flows_while_the_tank_level_drops():
     assert f.dry_for(2.6) == 1.6
     assert not f.update(float('nan'), 3.0)              # no reading: no evidence
     assert WaterFlow(now=0.0).dry_for(4.0) == 4.0       # never flowed: dry since watching began
+
+
+def test_a_pump_that_moves_no_water_stalls_the_task_with_why():
+    f = WaterFlow(now=0.0)
+    assert f.stalled(NO_FLOW_TIME, 3) is None
+    why = f.stalled(NO_FLOW_TIME + 0.5, 3)
+    assert 'no water flows' in why and 'unknown (no reading)' in why and 'fire 3' in why
+    f.update(1.5, 1.0)
+    f.update(1.4, 2.0)                                  # flowed at 2 s: not stalled until 2 s + NO_FLOW_TIME
+    assert f.stalled(2.0 + NO_FLOW_TIME, 3) is None
+    assert '1.40 L' in f.stalled(2.5 + NO_FLOW_TIME, 3)
 
 
 def test_default_checks_is_the_constant():

@@ -14,11 +14,13 @@ from mbzirc_comm_objs.msg import (ExtinguishFacadeFireGoal, Object, ObjectDetect
                                   ObjectList, TakeOffGoal)
 from mbzirc_comm_objs.srv import CheckFireResponse
 from sensor_msgs.msg import LaserScan
+from std_srvs.srv import TriggerResponse
 
 from fake_backend import FakeBackend
 from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
 from mbzirc_agents.control import HoleCentering, body_to_world, front_distance, world_to_body
+from mbzirc_agents.tasks.cold_check import NOT_SEEN_HOT
 from mbzirc_agents.tasks.sensing import CAM_OFFSET_X, SensedObjects
 
 HOLDER = (11.4, 8.5, 6.0)          # west face; standoff at x = 11.4 - 1.5, facing +x (yaw 0)
@@ -42,6 +44,13 @@ def optical_detection(world, opening, pose, stamp=None):
     return d
 
 
+def in_view(world, pose) -> bool:
+    """Whether the RGB-D camera (640 x 480, fx = fy = 462.1: docs/interfaces.md) sees an arena point."""
+    b = world_to_body(np.subtract(world, pose[:3]), pose[3])
+    ahead = b[0] - CAM_OFFSET_X
+    return ahead > 0.2 and abs(b[1]) <= ahead * 320 / 462.1 and abs(b[2]) <= ahead * 240 / 462.1
+
+
 class Scene:
     """Publishes a hole and a laser scan at 10 Hz into the agent, answers CheckFire."""
 
@@ -51,6 +60,7 @@ class Scene:
         self.wall = None                          # laser distance ahead (None: no scan)
         self.circles = None                       # [(arena point, opening m or None)] seen by the camera
         self.hot = lambda: True
+        self.wander = None                        # t -> offset of the UAV from where its controller holds it
         self.stop = False
         be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
         be.clock.start_thread(self._loop, name='scene')
@@ -59,10 +69,12 @@ class Scene:
         while not self.stop:
             subs = self.be.subs
             circles = self.circles                  # read once: the test swaps it while this thread runs
+            if self.wander is not None:               # the UAV really is there: camera and GNSS agree
+                self.ual.gnss_offset = np.asarray(self.wander(self.be.clock.now()), dtype=float)
             if 'sensed_objects' in subs and circles is not None:
-                pose = np.r_[self.ual.pos, self.ual.yaw]
+                pose = np.r_[self.ual.pos + self.ual.gnss_offset, self.ual.yaw]
                 subs['sensed_objects'](ObjectDetectionList(
-                    objects=[optical_detection(w, o, pose) for w, o in circles]))
+                    objects=[optical_detection(w, o, pose) for w, o in circles if in_view(w, pose)]))
             elif 'sensed_objects' in subs:
                 d = ObjectDetection(type=C.TYPE_HOLE)
                 d.header.frame_id = 'arena'
@@ -133,7 +145,8 @@ def test_cold_answers_off_the_hole_do_not_count(scene):
         sc.hole = np.array(HOLDER) + np.array([0.0, 0.45, 0.0])
     be.clock.start_thread(move_hole_once_pumping)
     s, status = extinguish(be)
-    assert status == 'aborted' and 'not done after' in s.result.message, (status, s.result.message)
+    assert status == 'aborted', (status, s.result.message)
+    assert 'not done after' in s.result.message or 'no water flows' in s.result.message, s.result.message
     assert sc.statuses == []
 
 
@@ -246,26 +259,71 @@ def test_a_decoy_taken_for_the_hole_is_dropped_for_the_opening(scene):
     assert ual.water > 0.3 and sc.statuses == [C.STATUS_EXTINGUISHED]
 
 
-def test_a_fire_never_seen_hot_is_out_only_on_a_hole_seen_through(scene):
-    """A nearly quenched heater reads cold from the start: on an opening it is out after 2 x COLD_CHECKS
-    cold answers (water kept flowing meanwhile); on a circle not known to be the hole it is not."""
+def test_a_fire_never_seen_hot_is_never_judged_out(scene):
+    """Cold from the first answer on the hole the camera sees through (it may look through the hole, or the
+    heater is nearly quenched): it gets ~top_up_time of water in which to show hot, and is then not
+    reported out (the goal fails with why, the fire stays active). Was: out after 2 x COLD_CHECKS."""
     agent, ual, be, sc = scene
     ual.speedup = 1.0
     sc.hot = lambda: False
     sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
-    t0 = be.clock.now()
     s, status = extinguish(be, timeout=40)
-    assert status == 'succeeded' and s.result.extinguished, s.result.message
-    assert ual.water > 0.2 and sc.statuses == [C.STATUS_EXTINGUISHED]
-    assert any('never hot' in m for m in be.infos)
-    assert be.clock.now() - t0 > 2 * C.COLD_CHECKS * 0.5
-    sc.statuses.clear()
-    ual.water = 2.0
-    sc.circles = None                                  # the scripted hole in the arena frame: no depth
-    be.clock.sleep(0.3)                                    # (let it replace the last detection with depth)
+    assert status == 'aborted' and NOT_SEEN_HOT in s.result.message, (status, s.result.message)
+    assert sc.statuses == []
+    used = 2.0 - ual.water
+    assert 0.2 * agent.p.top_up_time * 0.8 <= used <= 0.2 * (agent.p.top_up_time + 2.0), used
+    assert not ual.pump
+
+
+def test_cold_answers_without_water_flowing_do_not_count(scene):
+    """Seen hot, centred, the pump told to start but no water moves (a failed pump): the cold answers that
+    follow say nothing about the fire; the goal fails once no water flowed for NO_FLOW_TIME."""
+    agent, ual, be, sc = scene
+    ual.speedup = 1.0
+    started = []                                   # when the pump was told to start
+    be.handlers['actuators_system/start_pump'] = \
+        lambda r: started.append(be.clock.now()) or TriggerResponse(success=True, message='')
+    sc.hot = lambda: not started or be.clock.now() - started[0] < 1.5
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
     s, status = extinguish(be, timeout=40)
-    assert status == 'succeeded' and not s.result.extinguished, s.result.message
-    assert ual.water <= 0.1 and sc.statuses == []
+    assert status == 'aborted' and 'no water flows' in s.result.message, (status, s.result.message)
+    assert sc.statuses == [] and ual.water == 2.0
+
+
+def test_a_gusty_offset_around_the_hole_is_centred_on_average(scene):
+    """Gusts keep the UAV wandering 0.3 m around the hole (a circle every 2 s, that its controller cannot
+    follow): never within the tolerance on both axes at once, but on the hole on average. It must shoot,
+    not give up with 'could not centre'."""
+    agent, ual, be, sc = scene
+    agent.p.centering_timeout = 12.0
+    ual.follow_velocity = True
+    ual.speedup = 1.0
+    w = 2 * math.pi / 2.0
+    gusty = lambda: bool(be.pubs.get('ual/set_velocity'))     # from the centring on (go_to ends on the spot)
+    sc.wander = lambda t: np.array([0.0, 0.3 * math.cos(w * t), 0.3 * math.sin(w * t)]) * gusty()
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
+    sc.hot = lambda: ual.water > 1.7
+    s, status = extinguish(be, timeout=40)
+    assert status == 'succeeded' and s.result.extinguished, (status, s.result.message)
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+
+
+def test_an_estimate_far_off_the_hole_is_searched_around(scene):
+    """The fire's estimate is 1.6 m off its hole (0.7 m aside, 1.4 m low: placed with a GNSS error), too far
+    to snap to the holder: from the shooting distance in front of the estimate the camera sees no circle.
+    The UAV backs off to look wider around the estimate and the nearest known holder, locks the hole the
+    circle detector picks, centres on it as seen and puts the fire out (realistic seed 103: 'could not
+    centre the hole in 30 s' three times, aiming on such an estimate)."""
+    agent, ual, be, sc = scene
+    ual.follow_velocity = True
+    ual.speedup = 2.0
+    set_fire(be, np.array(HOLDER) + [0.0, -0.7, -1.4])
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
+    sc.hot = lambda: ual.water > 1.7
+    s, status = extinguish(be, timeout=60)
+    assert status == 'succeeded' and s.result.extinguished, (status, s.result.message)
+    assert abs(ual.pos[1] - HOLDER[1]) < 0.2 and abs(ual.pos[2] - HOLDER[2]) < 0.2, ual.pos
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
 
 
 def test_holes_are_placed_with_the_pose_of_their_image(scene):

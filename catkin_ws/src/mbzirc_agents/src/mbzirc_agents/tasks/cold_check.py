@@ -17,6 +17,8 @@ from typing import Optional
 from .. import constants as C
 
 FLOW_WINDOW = 1.5   # s: water flows when the tank level dropped this recently (the level comes at a few Hz)
+NO_FLOW_TIME = 4.0  # s with the pump on and the tank level still: no water flows (a fault)
+NOT_SEEN_HOT = 'not seen hot from the watering pose: not judged out'
 
 
 class ColdConfirmation:
@@ -71,6 +73,14 @@ class WaterFlow:
     def dry_for(self, now: float) -> float:
         """Seconds since water was last seen flowing (or since watching began)."""
         return now - (self.since if self.last_drop is None else self.last_drop)
+
+    def stalled(self, now: float, fire_id: int) -> Optional[str]:
+        """Why the water task must stop when the pump has moved no water for NO_FLOW_TIME, else None."""
+        if self.dry_for(now) <= NO_FLOW_TIME:
+            return None
+        level = f'{self.level:.2f} L' if self.level is not None else 'unknown (no reading)'
+        return (f'no water flows: the tank level stayed at {level} for {self.dry_for(now):.0f} s with the pump '
+                f'on; fire {fire_id} not judged out')
 
 
 def dry_tank_verdict(cold: ColdConfirmation) -> tuple:

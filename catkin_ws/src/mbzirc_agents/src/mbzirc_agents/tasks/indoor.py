@@ -13,15 +13,13 @@ import numpy as np
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
-from .cold_check import ColdConfirmation, WaterFlow, dry_tank_verdict
+from .cold_check import NOT_SEEN_HOT, ColdConfirmation, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
-NO_FLOW_TIME = 4.0         # s with the pump on and the tank level still: no water flows (a fault)
-NOT_SEEN_HOT = 'not seen hot from the watering pose: not judged out'
 
 
 def gen_enter_building(goal, agent) -> dict:
@@ -231,7 +229,7 @@ class ExtinguishIndoorFire(AgentTask):
 
         Cold answers count only with water flowing (the tank level dropping) and the robot still at the
         watering pose; off it (pushed, turned) it is sent back there. A pump that moves no water for
-        NO_FLOW_TIME fails the goal.
+        cold_check.NO_FLOW_TIME fails the goal.
         """
         a = self.agent
         pose = np.append(a.position()[:3], yaw)
@@ -247,10 +245,9 @@ class ExtinguishIndoorFire(AgentTask):
                 if not cold.seen_hot and now - start >= a.p.top_up_time:
                     raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: {now - start:.0f} s of top-up water on '
                                     'its confirmed track, left active')
-                if flow.dry_for(now) > NO_FLOW_TIME:
-                    level = f'{flow.level:.2f} L' if flow.level is not None else 'unknown (no reading)'
-                    raise TaskError(f'no water flows: the tank level stayed at {level} for '
-                                    f'{flow.dry_for(now):.0f} s with the pump on; fire {fire_id} not judged out')
+                stalled = flow.stalled(now, fire_id)
+                if stalled:
+                    raise TaskError(stalled)
                 if cold.seen_hot:
                     self.feedback('SHOOTING', f'fire {fire_id}: water {a.water_level:.2f} L')
                 else:
