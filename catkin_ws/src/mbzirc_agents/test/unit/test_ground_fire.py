@@ -1,0 +1,147 @@
+"""extinguish_ground_fire against a fake UAL flying the agent's velocity commands and a fake downward thermal
+camera: the blanket falls where the camera has the fire under the UAV, never where the estimate says.
+
+Why: the estimate is placed on the GNSS fixes of whoever saw the fire; in the UAV's own GNSS frame it may
+be most of a metre off (realistic seed 103: a blanket released beside the fire, which burned on)."""
+import math
+
+import numpy as np
+import pytest
+from mbzirc_comm_objs.msg import (ExtinguishGroundFireGoal, Object, ObjectDetection, ObjectDetectionList,
+                                  ObjectList, TakeOffGoal)
+from std_msgs.msg import Bool
+from std_srvs.srv import TriggerResponse
+
+from fake_backend import FakeBackend
+from fake_ual import start_uav, stop_agent
+from mbzirc_agents import constants as C
+from mbzirc_agents.control import world_to_body
+
+FIRE = np.array([3.0, 0.0, 0.0])            # the plate (truth)
+ESTIMATE_ERROR = np.array([0.0, 0.8, 0.0])  # the track in the UAV's GNSS frame, as another robot's fix put it
+VIEW = 0.3                                  # the camera sees the fire while its offset <= VIEW x the height
+COVERS = 0.3                                # m: a blanket released this close to the plate's centre covers it
+
+
+class DownwardCamera:
+    """Detections of the fire as the fire detector sends them (~14 Hz): the body-relative offset from the
+    true pose, placed in the arena with the reported (GNSS) pose; nothing while it is out of view or blind."""
+
+    def __init__(self, sc, blind=False):
+        self.sc, self.blind, self.stop = sc, blind, False
+        sc.be.clock.start_thread(self._loop, name='downward camera')
+
+    def _loop(self):
+        be, ual = self.sc.be, self.sc.ual
+        while not self.stop:
+            with ual.lock:
+                pos, yaw, reported = ual.pos.copy(), ual.yaw, ual.pos + ual.gnss_bias
+            h = pos[2] - FIRE[2]
+            off = FIRE[:2] - pos[:2]
+            if not self.blind and h > 0.5 and np.hypot(*off) <= VIEW * h and 'sensed_objects' in be.subs:
+                rel = world_to_body((off[0], off[1], -h), yaw)
+                det = ObjectDetection(type=C.TYPE_FIRE)
+                det.header.stamp.secs, det.header.stamp.nsecs = divmod(int(be.clock.now() * 1e9), 10 ** 9)
+                det.pose.pose.position.x, det.pose.pose.position.y = reported[:2] + (FIRE - pos)[:2]
+                det.relative_position.x, det.relative_position.y, det.relative_position.z = rel
+                det.image_detection.camera_direction = C.CAMERA_DOWNWARD
+                be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
+            be.clock.sleep(0.07)
+
+
+class Gust:
+    """Pushes the UAV `push` m sideways once, the first time it is below `below` m: the fire leaves the
+    narrow view of the low camera."""
+
+    def __init__(self, sc, below, push):
+        self.sc, self.below, self.push, self.stop, self.done = sc, below, np.asarray(push, float), False, False
+        sc.be.clock.start_thread(self._loop, name='gust')
+
+    def _loop(self):
+        ual = self.sc.ual
+        while not self.stop and not self.done:
+            with ual.lock:
+                if ual.pos[2] < self.below and ual.state == 4:
+                    ual.pos = ual.pos + self.push
+                    self.done = True
+            self.sc.be.clock.sleep(0.02)
+
+
+class Scene:
+    """The blanket UAV at 4 m with a blanket, one ground fire track ESTIMATE_ERROR from the plate."""
+
+    def __init__(self):
+        self.be = FakeBackend()
+        self.released = []              # true positions of the blanket releases
+        self.statuses = []
+        self.threads = ()
+        self.be.handlers['actuators_system/release_blanket'] = self._release
+        self.be.handlers['/set_object_status'] = lambda r: self.statuses.append(r.object_status) or type('R', (), {})()
+        self.agent, self.ual = start_uav(self.be, {'payload': 'blanket', 'centering_timeout': 15.0}, speedup=1.0)
+        self.ual.follow_velocity = True
+        self.be.subs['actuators_system/blanket_attached'](Bool(data=True))
+        s = self.be.servers['take_off_action']
+        s.send(TakeOffGoal(height=4.0))
+        assert s.wait(10) == 'succeeded'
+        o = Object(id=5, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_GROUND, status=C.STATUS_ACTIVE, num_updates=50)
+        o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = FIRE + ESTIMATE_ERROR
+        self.be.subs['/estimated_objects'](ObjectList(objects=[o]))
+
+    def _release(self, _req):
+        with self.ual.lock:
+            self.released.append(self.ual.pos.copy())
+        self.be.subs['actuators_system/blanket_attached'](Bool(data=False))
+        return TriggerResponse(success=True, message='')
+
+    def extinguish(self):
+        s = self.be.servers['extinguish_ground_fire_action']
+        s.send(ExtinguishGroundFireGoal(fire_id=5))
+        assert s.wait(60) in ('succeeded', 'aborted')
+        return s
+
+    def close(self):
+        stop_agent(self.agent, self.ual, self.be, *self.threads)
+
+
+@pytest.fixture
+def scene():
+    made = []
+    yield lambda: made.append(Scene()) or made[-1]
+    for sc in made:
+        sc.close()
+
+
+def offsets(sc):
+    return [math.hypot(*(p[:2] - FIRE[:2])) for p in sc.released]
+
+
+def test_the_blanket_falls_where_the_camera_has_the_fire_under_the_uav(scene):
+    sc = scene()
+    sc.threads = (DownwardCamera(sc),)
+    s = sc.extinguish()
+    assert s.status == 'succeeded', s.result.message
+    assert len(sc.released) == 1 and offsets(sc)[0] <= COVERS, offsets(sc)
+    assert sc.released[0][2] < 2.0
+
+
+def test_a_gust_at_low_height_does_not_send_the_blanket_to_the_estimate(scene):
+    """Pushed 1 m off at 1.8 m, where the camera sees only 0.54 m around: out of sight, the UAV climbs back
+    over where it last saw the fire, finds it again and releases over it, not over the estimate (0.8 m off,
+    on the side the gust pushed it to)."""
+    sc = scene()
+    sc.threads = (DownwardCamera(sc), Gust(sc, below=1.8, push=(0.0, 1.0, 0.0)))
+    s = sc.extinguish()
+    assert sc.threads[1].done
+    assert s.status == 'succeeded', s.result.message
+    assert len(sc.released) == 1 and offsets(sc)[0] <= COVERS, offsets(sc)
+
+
+def test_a_fire_the_camera_never_sees_gets_no_blanket(scene):
+    """The estimate alone does not release the blanket: the goal fails (the central unit tries again), the
+    blanket stays on for a fire the camera can see."""
+    sc = scene()
+    sc.threads = (DownwardCamera(sc, blind=True),)
+    s = sc.extinguish()
+    assert s.status == 'aborted' and 'never seen' in s.result.message, s.result.message
+    assert sc.released == [] and sc.statuses == []
+    assert sc.ual.min_flying_z > 3.0            # it never went down blind
