@@ -15,7 +15,8 @@ import rosnode
 import rospy
 import rostest
 from geometry_msgs.msg import PointStamped
-from mbzirc_comm_objs.srv import AskForRegion, AskForRegionRequest, FreeRegions, FreeRegionsRequest
+from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegionResponse, FreeRegions,
+                                  FreeRegionsRequest)
 
 
 def box_req(agent, label, lo, hi):
@@ -75,6 +76,36 @@ class TestRegions(unittest.TestCase):
         self.assertIn('success: False', out)
         self.assertFalse(self.ask(box_req('1', 'go_to', (31, 31, 1), (33, 33, 4))).success)
         self.assertTrue(self.free(FreeRegionsRequest(agent_id='2', free_all=True)).success)   # its owner may
+
+    def test_deadlock_asks_the_lower_priority_robot_to_step_aside(self):
+        """Seed 104's deadlock: 2's go_to over 3's hold and 3's go_to over 2's hold, both retried at 4 Hz;
+        the manager calls robot 3's yield_region (3 has the lower priority) with 2's refused box."""
+        calls = []
+
+        def on_yield(req):
+            calls.append(req)
+            return AskForRegionResponse(success=True)
+        srv = rospy.Service('/mbzirc2020_3/yield_region', AskForRegion, on_yield)
+        try:
+            self.assertTrue(self.ask(box_req('2', 'hold', (99.6, 98.0, 5.0), (101.6, 100.0, 7.0))).success)
+            self.assertTrue(self.ask(box_req('3', 'hold', (100.4, 102.1, 6.4), (102.4, 104.1, 8.4))).success)
+            deadline = time.time() + 20.0
+            while not calls and time.time() < deadline:
+                self.assertFalse(self.ask(box_req('2', 'go_to', (99.6, 98.0, 5.0), (104.0, 109.0, 7.0))).success)
+                self.assertFalse(self.ask(box_req('3', 'go_to', (99.0, 94.0, 6.4), (102.4, 104.1, 8.4))).success)
+                time.sleep(0.25)
+            self.assertTrue(calls, 'robot 3 was never asked to step aside')
+            req = calls[0]
+            self.assertEqual((req.agent_id, req.label), ('2', 'go_to'))
+            self.assertEqual((req.min_corner.point.x, req.max_corner.point.y, req.max_corner.point.z),
+                             (99.6, 109.0, 7.0))
+            # robot 3 steps up out of 2's box: 2's request is granted
+            self.assertTrue(self.ask(box_req('3', 'hold', (100.4, 102.1, 7.1), (102.4, 104.1, 9.1))).success)
+            self.assertTrue(self.ask(box_req('2', 'go_to', (99.6, 98.0, 5.0), (104.0, 109.0, 7.0))).success)
+        finally:
+            srv.shutdown()
+            for a in ('2', '3'):
+                self.free(FreeRegionsRequest(agent_id=a, free_all=True))
 
     def test_reservations_survive_kill_9(self):
         self.assertTrue(self.ask(box_req('3', 'parked', (50, 50, 0), (52, 52, 4))).success)

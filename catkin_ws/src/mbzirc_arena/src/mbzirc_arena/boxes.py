@@ -36,6 +36,12 @@ def column_box(x: float, y: float, z0: float, z1: float, half_side: float) -> Bo
     return make_box((x - half_side, y - half_side, min(z0, z1)), (x + half_side, y + half_side, max(z0, z1)))
 
 
+def box_text(box: Box) -> str:
+    """A box in words for the logs: [x, y, z .. x, y, z] to the decimetre (the agent and the manager
+    name the same box the same way)."""
+    return '[' + ', '.join(f'{v:.1f}' for v in box[0]) + ' .. ' + ', '.join(f'{v:.1f}' for v in box[1]) + ']'
+
+
 def point_in_box(p: Sequence[float], box: Box) -> bool:
     """True when p is inside the box (faces included)."""
     q = np.asarray(p, dtype=float)

@@ -24,6 +24,11 @@ Rules added because the table is shared by every robot and trusted by all of the
   every request slower without limit).
 - **Persistent** (`to_state` / `load_state`, the node writes them to a state file): a respawned manager
   keeps every reservation, so two UAVs are never both granted the same airspace across a crash.
+- **Deadlocks are broken** (`deadlock()`, rules in deadlock.py): the refused requests of the robots that
+  are still asked for are kept (not the unknown agents'); when they form a wait-for cycle with the boxes
+  held (each one's request overlaps the next one's hold) for `deadlock_after_s`, the lowest-priority robot
+  of the cycle is named to leave the box the robot waiting for it asked for. An order is not repeated for
+  `yield_retry_s`, nor is another robot of the same cycle named meanwhile unless the victim declined.
 """
 from __future__ import annotations
 
@@ -37,6 +42,8 @@ import numpy as np
 
 from mbzirc_arena.boxes import Box, boxes_overlap, make_box
 
+from .deadlock import Wait, YieldOrder, find_cycle, ranked_priority, yield_candidates
+
 ROBOT_NS = '/mbzirc2020_{}'
 
 
@@ -48,6 +55,14 @@ class Reservation:
     granted_at: float = 0.0       # monotonic (wall) time of the last granted request
 
 
+@dataclass
+class Refused:
+    """A robot's refused request, while it keeps asking for it."""
+    box: Box
+    since: float                  # wait_clock time of the first refusal of this box
+    last: float                   # wait_clock time of the latest refusal
+
+
 class RegionManager:
     """Holds the reserved boxes of every agent; thread-safe (service callbacks run in threads).
 
@@ -57,11 +72,21 @@ class RegionManager:
         unknown_lease_s: seconds an unknown agent holds a box after its last granted request.
         max_labels_per_agent, max_agents: the table's bounds.
         clock: monotonic seconds (injectable for tests).
+        priority: agent ids, highest priority first (default: known_agents in their order); the lowest of
+            a deadlock's cycle steps aside.
+        deadlock_after_s: how long a cycle must stand before a robot is told to step aside.
+        waiting_fresh_s: a refused request not asked again for this long no longer waits (agents retry
+            at 2 Hz).
+        yield_retry_s: an order is not repeated (nor another robot of its cycle named) for this long.
+        wait_clock: seconds for the waits (default: clock; the node gives ROS time, as the agents retry
+            in ROS time).
     """
 
     def __init__(self, known_agents: Optional[Iterable[str]] = None, supervisors: Iterable[str] = ('/central_unit',),
                  unknown_lease_s: float = 10.0, max_labels_per_agent: int = 16, max_agents: int = 32,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, priority: Optional[Iterable[str]] = None,
+                 deadlock_after_s: float = 2.0, waiting_fresh_s: float = 2.0, yield_retry_s: float = 20.0,
+                 wait_clock: Optional[Callable[[], float]] = None) -> None:
         self._regions: Dict[Tuple[str, str], Reservation] = {}
         self._lock = threading.Lock()
         self.known = None if known_agents is None else {str(a) for a in known_agents}
@@ -71,6 +96,13 @@ class RegionManager:
         self.max_agents = int(max_agents)
         self.clock = clock
         self.version = 0              # bumped at every change (the node saves when it moved)
+        self.priority = ranked_priority(priority, known_agents)
+        self.deadlock_after_s = float(deadlock_after_s)
+        self.waiting_fresh_s = float(waiting_fresh_s)
+        self.yield_retry_s = float(yield_retry_s)
+        self.wait_clock = wait_clock or clock
+        self._refused: Dict[Tuple[str, str], Refused] = {}
+        self._orders: Dict[Tuple[str, str], Tuple[float, bool]] = {}   # (victim, winner) -> (time, declined)
 
     # ---- rules ------------------------------------------------------------------------------------
     def is_known(self, agent_id: str) -> bool:
@@ -105,12 +137,14 @@ class RegionManager:
         if not all(math.isfinite(v) for v in values):
             return False, 'box has NaN or infinite corners'
         box = make_box(min_corner, max_corner)
+        key = (agent_id, label)
         with self._lock:
             self._expire()
             for (owner, other_label), other in self._regions.items():
                 if owner != agent_id and boxes_overlap(box, other.box):
+                    self._note_refused(key, box)
                     return False, f'overlaps region "{other_label}" of {owner}'
-            key = (agent_id, label)
+            self._refused.pop(key, None)
             if key not in self._regions:
                 labels = sum(1 for a, _ in self._regions if a == agent_id)
                 if labels >= self.max_labels:
@@ -121,6 +155,54 @@ class RegionManager:
             self._regions[key] = Reservation(box, caller or '', self.clock())
             self.version += 1
         return True, 'granted' if self.is_known(agent_id) else f'granted (unknown agent: {self.lease_s:.0f} s lease)'
+
+    def _note_refused(self, key: Tuple[str, str], box: Box) -> None:
+        """Remember a robot's refused request (call with the lock held); a new box restarts its wait."""
+        if not self.is_known(key[0]):
+            return
+        now = self.wait_clock()
+        old = self._refused.get(key)
+        same = old is not None and all(np.allclose(a, b, atol=0.05) for a, b in zip(old.box, box))
+        fresh = old is not None and now - old.last <= self.waiting_fresh_s
+        self._refused[key] = Refused(box, old.since if same and fresh else now, now)
+        if len(self._refused) > self.max_labels * self.max_agents:   # bounded: labels invented in a loop
+            self._refused = {k: r for k, r in self._refused.items() if now - r.last <= self.waiting_fresh_s}
+
+    def deadlock(self) -> Optional[YieldOrder]:
+        """The order that breaks a standing wait-for cycle (module docstring), or None.
+
+        The order counts as given: the caller reports the victim's answer with `yield_answer`."""
+        now = self.wait_clock()
+        with self._lock:
+            waits: Dict[str, Wait] = {}
+            latest_first = sorted(self._refused.items(), key=lambda kv: (kv[0][0], -kv[1].last, kv[0][1]))
+            for (agent, label), r in latest_first:           # an agent waits for its latest request
+                if now - r.last > self.waiting_fresh_s or now - r.since < self.deadlock_after_s or agent in waits:
+                    continue
+                blockers = tuple(sorted(k for k, res in self._regions.items()
+                                        if k[0] != agent and boxes_overlap(r.box, res.box)))
+                waits[agent] = Wait(agent, label, (r.box[0].copy(), r.box[1].copy()), blockers)
+            self._refused = {k: r for k, r in self._refused.items() if now - r.last <= self.waiting_fresh_s}
+            cycle = find_cycle(waits)
+            if cycle is None:
+                return None
+            orders = yield_candidates(cycle, self.priority)
+            recent = {pair: v for pair, v in self._orders.items() if now - v[0] < self.yield_retry_s}
+            self._orders = recent
+            if any(not declined for (victim, winner), (_, declined) in recent.items()
+                   if any(o.victim == victim and o.winner == winner for o in orders)):
+                return None                   # a robot of this cycle is stepping aside: give it time
+            for order in orders:
+                if (order.victim, order.winner) not in recent:
+                    self._orders[(order.victim, order.winner)] = (now, False)
+                    return order
+            return None
+
+    def yield_answer(self, order: YieldOrder, accepted: bool) -> None:
+        """The victim's answer: a declined order lets the next robot of the cycle be named."""
+        with self._lock:
+            if not accepted:
+                self._orders[(order.victim, order.winner)] = (self.wait_clock(), True)
 
     def free(self, agent_id: str, label: str = '', free_all: bool = False, caller: Optional[str] = None
              ) -> Tuple[bool, str]:

@@ -6,6 +6,10 @@ boxes), `~max_labels_per_agent` (16), `~max_agents` (32), `~state_file` ('' = of
 there atomically after every change and reloaded by a respawned manager), `~clock_wait` (10 s wall: how
 long a start waits for /clock to judge the file's age), `~publish_markers` (false: the reserved boxes as a
 MarkerArray on `regions` at 1 Hz, for rviz).
+Deadlocks (core.py, deadlock.py): `~priority` (default `~robot_ids`: highest first; the lowest of a
+wait-for cycle steps aside), `~deadlock_after` (2 s ROS time a cycle stands before the order),
+`~yield_retry` (20 s ROS time before an order is repeated), `~yield_service` ('/mbzirc2020_{}/yield_region':
+the victim's AskForRegion service, called with the winner's agent id, label and refused box: "leave it").
 """
 from __future__ import annotations
 
@@ -16,11 +20,13 @@ import threading
 import time
 
 import rospy
-from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionResponse, FreeRegions, FreeRegionsResponse)
+from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegionResponse, FreeRegions,
+                                  FreeRegionsResponse)
 from mbzirc_ros_utils import state_file
 from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .core import RegionManager
+from .deadlock import YieldOrder
 
 FORMAT = 'shared_regions_manager/regions'
 VERSION = 1
@@ -40,7 +46,12 @@ class RegionManagerNode:
             supervisors=rospy.get_param('~supervisors', ['/central_unit']),
             unknown_lease_s=float(rospy.get_param('~unknown_lease_s', 10.0)),
             max_labels_per_agent=int(rospy.get_param('~max_labels_per_agent', 16)),
-            max_agents=int(rospy.get_param('~max_agents', 32)))
+            max_agents=int(rospy.get_param('~max_agents', 32)),
+            priority=[str(a) for a in rospy.get_param('~priority', [])],
+            deadlock_after_s=float(rospy.get_param('~deadlock_after', 2.0)),
+            yield_retry_s=float(rospy.get_param('~yield_retry', 20.0)),
+            wait_clock=rospy.get_time)
+        self.yield_service = str(rospy.get_param('~yield_service', '/mbzirc2020_{}/yield_region'))
         self.state_file = str(rospy.get_param('~state_file', '') or '')
         self.mission = str(rospy.get_param('/run_id', '') or '') if self.state_file else ''
         self._save_lock = threading.Lock()
@@ -145,13 +156,36 @@ class RegionManagerNode:
             self.publish_markers()
 
     def on_timer(self, _event=None) -> None:
-        """Expire the leases of unknown agents; publish the markers."""
+        """Expire the leases of unknown agents; break a deadlock; publish the markers."""
         gone = self.core.expire()
         if gone:
             rospy.logwarn(f'region manager: leases expired: {", ".join(f"{a}/{l}" for a, l in gone)}')
             self.save()
+        order = self.core.deadlock()
+        if order is not None:
+            rospy.logwarn(f'region manager: {order.describe()}')
+            threading.Thread(target=self.send_yield, args=(order,), daemon=True, name='yield order').start()
         if self.markers is not None:
             self.publish_markers()
+
+    def send_yield(self, order: YieldOrder) -> None:
+        """Ask the victim to leave the winner's box (its yield_region service: an AskForRegion whose agent
+        and box are the winner's); its answer goes back to the core. Runs in its own thread: an agent that
+        does not answer must not stop the timer."""
+        name = self.yield_service.format(order.victim)
+        req = AskForRegionRequest(agent_id=order.winner, label=order.winner_label)
+        for corner, values in ((req.min_corner, order.box[0]), (req.max_corner, order.box[1])):
+            corner.header.frame_id = 'arena'
+            corner.point.x, corner.point.y, corner.point.z = (float(v) for v in values)
+        try:
+            rospy.wait_for_service(name, timeout=2.0)
+            accepted = bool(rospy.ServiceProxy(name, AskForRegion)(req).success)
+            why = 'accepted: stepping aside' if accepted else 'declined (it cannot step aside now)'
+        except (rospy.ROSException, rospy.ServiceException) as e:
+            accepted, why = False, f'not reached ({e})'
+        (rospy.loginfo if accepted else rospy.logwarn)(
+            f'region manager: {order.victim} {why}, out of {order.winner}/{order.winner_label}')
+        self.core.yield_answer(order, accepted)
 
     def publish_markers(self, _event=None) -> None:
         """The reserved boxes as translucent cubes (namespace = agent id)."""

@@ -153,3 +153,102 @@ def test_load_refuses_malformed_or_overlapping_tables():
         except ValueError:
             pass
     assert rm.owner_at((0.5, 0.5, 0.5)) == '1'                             # unchanged
+
+
+# ---- deadlocks: a wait-for cycle between refused requests and held boxes -------------------------------------
+class FakeClock:
+    """Seconds that move only when the test says so."""
+
+    def __init__(self):
+        self.t = 100.0
+
+    def __call__(self):
+        return self.t
+
+
+def seed_104_cycle(rm, clock, seconds=3.0):
+    """Realistic seed 104 right after take-off: UAV 2 holds at z 6, UAV 3 at z 7.4, 4 m apart; each one's
+    go_to (retried at 2 Hz) overlaps the other's hold."""
+    assert rm.ask('2', 'hold', (-0.4, -2.0, 5.0), (1.6, 0.0, 7.0))[0]
+    assert rm.ask('3', 'hold', (0.4, 2.1, 6.4), (2.4, 4.1, 8.4))[0]
+    for _ in range(int(seconds * 2)):
+        assert not rm.ask('3', 'go_to', (-1.0, -6.0, 6.4), (2.4, 4.1, 8.4))[0]     # 3 across 2's hold
+        assert not rm.ask('2', 'go_to', (-0.4, -2.0, 5.0), (4.0, 9.0, 7.0))[0]     # 2 across 3's hold
+        clock.t += 0.5
+
+
+def test_two_agent_cycle_names_the_lower_priority_agent_to_step_out_of_the_others_box():
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['0', '1', '2', '3'], clock=clock)
+    seed_104_cycle(rm, clock)
+    order = rm.deadlock()
+    assert order is not None, 'the two-agent cycle was not found'
+    assert (order.victim, order.winner, order.winner_label, order.victim_labels) == ('3', '2', 'go_to', ('hold',))
+    assert list(order.box[0]) == [-0.4, -2.0, 5.0] and list(order.box[1]) == [4.0, 9.0, 7.0]
+    words = order.describe()
+    assert '2/go_to' in words and '3/hold' in words and '3/go_to' in words and '2/hold' in words
+    assert rm.deadlock() is None                          # not repeated while the victim steps aside
+    # 3 steps up out of 2's go_to box: 2's request is granted, the cycle is gone
+    assert rm.ask('3', 'hold', (0.4, 2.1, 7.1), (2.4, 4.1, 9.1))[0]
+    assert rm.ask('2', 'go_to', (-0.4, -2.0, 5.0), (4.0, 9.0, 7.0))[0]
+    clock.t += 30.0
+    assert rm.deadlock() is None
+
+
+def test_no_deadlock_for_a_one_way_wait_a_short_one_or_an_agent_that_stopped_asking():
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['2', '3'], clock=clock, deadlock_after_s=2.0)
+    assert rm.ask('2', 'hold', (0, 0, 0), (2, 2, 2))[0]
+    assert rm.ask('3', 'hold', (10, 0, 0), (12, 2, 2))[0]
+    for _ in range(10):                                   # 3 waits for 2, 2 waits for nobody
+        assert not rm.ask('3', 'go_to', (1, 0, 0), (11, 2, 2))[0]
+        clock.t += 0.5
+    assert rm.deadlock() is None
+    rm2 = RegionManager(known_agents=['2', '3'], clock=clock, deadlock_after_s=2.0)
+    seed_104_cycle(rm2, clock, seconds=1.0)              # a cycle of 1 s: not yet
+    assert rm2.deadlock() is None
+    clock.t += 5.0                                        # both stopped asking (preempted): nobody waits
+    assert rm2.deadlock() is None
+
+
+def test_a_declined_order_names_the_next_agent_of_the_cycle_and_orders_are_retried_later():
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['0', '1', '2', '3'], clock=clock, yield_retry_s=20.0)
+    seed_104_cycle(rm, clock)
+    first = rm.deadlock()
+    rm.yield_answer(first, accepted=False)
+    seed_104_cycle(rm, clock, seconds=1.0)
+    second = rm.deadlock()
+    assert (first.victim, second.victim, second.winner) == ('3', '2', '3')
+    rm.yield_answer(second, accepted=False)
+    seed_104_cycle(rm, clock, seconds=1.0)
+    assert rm.deadlock() is None                          # both declined: wait before asking again
+    seed_104_cycle(rm, clock, seconds=20.0)
+    assert rm.deadlock().victim == '3'
+
+
+def test_priority_param_and_three_agent_cycle():
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['1', '2', '3'], priority=['3', '1', '2'], clock=clock)
+    for a, x in (('1', 0), ('2', 10), ('3', 20)):
+        assert rm.ask(a, 'hold', (x, 0, 0), (x + 2, 2, 2))[0]
+    for _ in range(6):                                    # 1 -> 2 -> 3 -> 1
+        assert not rm.ask('1', 'go_to', (1, 0, 0), (11, 2, 2))[0]
+        assert not rm.ask('2', 'go_to', (11, 0, 0), (21, 2, 2))[0]
+        assert not rm.ask('3', 'go_to', (1, 0, 0), (21, 2, 0.5))[0]   # overlaps 1 and 2: 2 is not its wait
+        clock.t += 0.5
+    order = rm.deadlock()
+    assert order is not None and order.victim == '2' and order.winner == '1'
+    assert [w.agent for w in order.cycle] == ['1', '2', '3']
+
+
+def test_unknown_agents_never_take_part_in_a_deadlock():
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['2'], clock=clock)
+    assert rm.ask('2', 'hold', (0, 0, 0), (2, 2, 2))[0]
+    assert rm.ask('ghost', 'hold', (10, 0, 0), (12, 2, 2))[0]
+    for _ in range(6):
+        rm.ask('2', 'go_to', (1, 0, 0), (11, 2, 2))
+        rm.ask('ghost', 'go_to', (1, 0, 0), (11, 2, 2))
+        clock.t += 0.5
+    assert rm.deadlock() is None
