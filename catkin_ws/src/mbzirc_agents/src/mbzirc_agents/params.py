@@ -50,6 +50,9 @@ class AgentParams:
     region_margin: float = _param(C.REGION_MARGIN, 'm added around the box reserved for each flight leg')
     region_timeout: float = _param(C.REGION_WAIT_TIMEOUT, 's a motion waits for its region')
     hold_half_size: float = _param(C.HOLD_HALF_SIZE, 'm, half side of the box a hovering UAV holds')
+    step_aside_max: float = _param(4.0, 'm, longest step a hovering UAV takes out of another UAV\'s box when '
+                                   'the region manager breaks a deadlock (region_yield.py)')
+    step_aside_min_z: float = _param(2.0, 'm, lowest height such a step goes down to')
     position_tolerance: float = _param(C.POSITION_TOLERANCE, 'm from a waypoint that counts as there')
     yaw_tolerance: float = _param(C.YAW_TOLERANCE, 'rad from a waypoint yaw that counts as there')
     max_speed: float = _param(1.6, 'm/s; motion time-outs assume half of it')

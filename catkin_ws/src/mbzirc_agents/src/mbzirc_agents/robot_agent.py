@@ -15,11 +15,11 @@ from typing import Any, Dict, Optional, Sequence
 import numpy as np
 from geometry_msgs.msg import PointStamped, PoseStamped, TwistStamped
 from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
-from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, CheckFire, FreeRegions,
+from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegionResponse, CheckFire, FreeRegions,
                                   FreeRegionsRequest, GetCostToGoTo, GetCostToGoToResponse, SetObjectStatus,
                                   SetObjectStatusRequest)
 from std_msgs.msg import Bool, Float32, Header
-from mbzirc_arena.boxes import check_point
+from mbzirc_arena.boxes import Box, box_text, boxes_overlap, check_point, make_box, swept_box
 from mbzirc_arena.c3 import ARENA
 from mbzirc_ros_utils.liveness import HeartbeatFilter
 from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
@@ -32,6 +32,7 @@ from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
+from .region_yield import STEP_LABEL, step_aside_targets
 
 
 def feed_content(msg: AgentDataFeed) -> tuple:
@@ -75,6 +76,10 @@ class RobotAgent(Agent):
         self._watchdog_stop = threading.Event()
         self._watchdog_thread: Optional[threading.Thread] = None
         self.parked = False                # a 'parked' region is held while landed
+        self.held: Dict[str, Box] = {}     # our granted boxes by label (as we asked for them)
+        self._waiting_for: Optional[str] = None   # the label reserve() is waiting for (refused so far)
+        self._yield_order: Optional[tuple] = None # (winner, label, box) the region manager asked us to leave
+        self._regions_lock = threading.Lock()
         self._last_park_try = -1e9
         ifc = self.iface
         ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
@@ -93,6 +98,7 @@ class RobotAgent(Agent):
         self.pump_start_srv = ifc.add_client('actuators_system/start_pump', Trigger)
         self.pump_stop_srv = ifc.add_client('actuators_system/stop_pump', Trigger)
         ifc.add_service_server(None, 'get_cost_to_go_to', GetCostToGoTo, default_callback=self._on_cost)
+        ifc.add_service_server(None, 'yield_region', AskForRegion, default_callback=self._on_yield_region)
         if self.p.fault_injection:       # the fault suite's "exception in a task" (test only)
             ifc.add_service_server(None, 'inject_fault', Trigger, default_callback=self._on_inject_fault)
         self._last_feed: tuple = (None, -1e9)   # content and ROS time of the last data_feed sent
@@ -459,41 +465,147 @@ class RobotAgent(Agent):
         self.vel_pub.publish(msg)
 
     # ---- regions ----------------------------------------------------------------------------------------
+    def _region_request(self, label: str, box: Box) -> AskForRegionRequest:
+        """The AskForRegion request of our box under label (arena frame)."""
+        req = AskForRegionRequest(agent_id=self.agent_id, label=label)
+        for name, corner in (('min_corner', box[0]), ('max_corner', box[1])):
+            point = PointStamped()
+            point.header.frame_id = C.GLOBAL_FRAME
+            point.point.x, point.point.y, point.point.z = (float(v) for v in corner)
+            setattr(req, name, point)
+        return req
+
+    def _ask(self, label: str, box: Box) -> tuple:
+        """One ask_for_region: (granted, why not); a granted box is remembered in `held`."""
+        try:
+            if not self.ask_srv(self._region_request(label, box)).success:
+                return False, 'occupied by another agent'
+        except Exception as e:
+            return False, f'ask_for_region failed: {e}'
+        with self._regions_lock:
+            self.held[label] = (np.asarray(box[0], float), np.asarray(box[1], float))
+        return True, ''
+
     def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None) -> None:
-        """Ask for box under label until granted (2 Hz); TaskError after timeout s."""
+        """Ask for box under label until granted (2 Hz); TaskError after timeout s.
+
+        While it waits, the region manager may ask this robot to step aside out of another robot's
+        refused box (a deadlock, `_on_yield_region`): the step is taken here, in the task's thread, and
+        the box asked for grows to cover the path from the new place (the robot now starts from there)."""
         if not self.p.use_regions:
             return
-        lo, hi = box
-        req = AskForRegionRequest(agent_id=self.agent_id, label=label)
-        req.min_corner = PointStamped()
-        req.min_corner.header.frame_id = C.GLOBAL_FRAME
-        req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z = map(float, lo)
-        req.max_corner = PointStamped()
-        req.max_corner.header.frame_id = C.GLOBAL_FRAME
-        req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z = map(float, hi)
+        box = make_box(*box)
         timeout = self.p.region_timeout if timeout is None else timeout
         end = self.backend.now() + timeout
-        while True:
-            task.check_preempt()
-            try:
-                if self.ask_srv(req).success:
+        try:
+            while True:
+                task.check_preempt()
+                ok, why = self._ask(label, box)
+                if ok:
                     return
-                why = 'occupied by another agent'
-            except Exception as e:
-                why = f'ask_for_region failed: {e}'
-            if self.backend.now() > end:
-                raise TaskError(f'region {label} not granted after {timeout:.0f} s ({why})')
-            task.feedback('WAITING_REGION', f'waiting for region {label}: {why}')
-            self.backend.sleep(0.5)
+                with self._regions_lock:
+                    self._waiting_for = label
+                    order, self._yield_order = self._yield_order, None
+                if order is not None and self._step_aside(task, *order):
+                    box = self._covering_here(box)
+                    continue
+                if self.backend.now() > end:
+                    raise TaskError(f'region {label} not granted after {timeout:.0f} s ({why})')
+                task.feedback('WAITING_REGION', f'waiting for region {label}: {why}')
+                self.backend.sleep(0.5)
+        finally:
+            with self._regions_lock:
+                self._waiting_for, self._yield_order = None, None
 
     def free(self, label: str = '', free_all: bool = False) -> None:
         """Free one region (or all of ours); errors are only logged (the manager may be gone)."""
         if not self.p.use_regions:
             return
+        with self._regions_lock:
+            if free_all:
+                self.held.clear()
+            else:
+                self.held.pop(label, None)
         try:
             self.free_srv(FreeRegionsRequest(agent_id=self.agent_id, label=label, free_all=free_all))
         except Exception as e:
             self.backend.logerr_throttle(5.0, f'free_regions failed: {e}')
+
+    def hold_box(self, p: Sequence[float]) -> Box:
+        """The box a hovering UAV keeps for itself around p."""
+        h = self.p.hold_half_size
+        return (np.array([p[0] - h, p[1] - h, p[2] - h]), np.array([p[0] + h, p[1] + h, p[2] + h]))
+
+    def _covering_here(self, box: Box) -> Box:
+        """box grown to cover the robot's place (as a go-to leg's start is covered): after a step aside
+        the path to the box starts from here."""
+        here = self.position(wait=0.0)[:3]
+        pad = max(self.p.hold_half_size, self.p.region_margin)
+        return np.minimum(box[0], here - pad), np.maximum(box[1], here + pad)
+
+    # ---- deadlocks: stepping aside when the region manager asks ------------------------------------------
+    def _on_yield_region(self, req: Any) -> AskForRegionResponse:
+        """yield_region: the region manager found a deadlock (each of two robots waits for a box that
+        overlaps the other's hold) and asks this robot to leave req's box, the refused request of robot
+        req.agent_id. Accepted (success) only while a task waits in reserve() for another box, hovering,
+        with nothing but the hover box in the way and a place to step to; the step is taken by the
+        waiting task (reserve). Declined otherwise: the manager then asks the other robot."""
+        lo = (req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z)
+        hi = (req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z)
+        what = f'{req.agent_id}/{req.label} {box_text((lo, hi))}'
+        if not all(map(math.isfinite, lo + hi)):
+            self.backend.logerr_throttle(5.0, f'yield_region from {req.agent_id!r}: NaN or infinite box')
+            return AskForRegionResponse(success=False)
+        box = make_box(lo, hi)
+        why = self._why_cannot_yield(box)
+        if why:
+            self.backend.logwarn(f'region manager asks us to step out of {what}: declined ({why})')
+            return AskForRegionResponse(success=False)
+        with self._regions_lock:
+            self._yield_order = (str(req.agent_id), str(req.label), box)
+        self.backend.logwarn(f'region manager asks us to step out of {what} (a deadlock): accepted')
+        return AskForRegionResponse(success=True)
+
+    def _why_cannot_yield(self, box: Box) -> str:
+        """Why this robot cannot step out of box now ('' when it can)."""
+        if self.ROBOT_TYPE != 'uav' or not self.p.use_regions:
+            return 'not a UAV reserving regions'
+        if self.ual_state != C.UAL_FLYING_AUTO or self.pose is None or self.pose_in_doubt():
+            return 'not hovering with a trusted pose'
+        with self._regions_lock:
+            waiting, held = self._waiting_for, dict(self.held)
+        if waiting is None or waiting == 'hold':
+            return 'not waiting for a region'
+        in_the_way = sorted(l for l, b in held.items() if boxes_overlap(b, box))
+        if in_the_way != ['hold']:
+            return f'our boxes in the way: {in_the_way or "none"}'
+        if not self._step_targets(box):
+            return 'no free place to step to'
+        return ''
+
+    def _step_targets(self, box: Box) -> list:
+        return step_aside_targets(self.position(wait=0.0), self.p.hold_half_size, box, self.arena, C.BUILDINGS,
+                                  self.p.building_clearance, self.p.step_aside_min_z, self.p.step_aside_max)
+
+    def _step_aside(self, task: AgentTask, winner: str, label: str, box: Box) -> bool:
+        """Move the hover box out of box (robot winner's refused request `label`): reserve the step (our
+        hold to the new place), fly it, hold there. False (and a log) when no step is granted."""
+        here = self.position()
+        for target in self._step_targets(box):
+            step = swept_box(here[:3], target, self.p.hold_half_size)
+            if not self._ask(STEP_LABEL, step)[0]:
+                continue
+            self.backend.logwarn(f'stepping aside from {np.round(here[:3], 2)} to {np.round(target, 2)}: out of '
+                                 f'{winner}/{label} {box_text(box)} (a deadlock)')
+            task.feedback('STEPPING_ASIDE', f'out of the way of {winner}/{label}')
+            try:
+                self.move_to(task, target, None, 'stepping aside')
+                self.reserve(task, 'hold', self.hold_box(self.position()), timeout=10.0)
+            finally:
+                self.free(STEP_LABEL)
+            return True
+        self.backend.logwarn(f'cannot step out of {winner}/{label} {box_text(box)}: no step granted')
+        return False
 
     # ---- payload ---------------------------------------------------------------------------------------
     def trigger(self, srv: Any, what: str) -> None:
@@ -569,17 +681,8 @@ class RobotAgent(Agent):
         self._last_park_try = now
         p, h = self.position(wait=0.0), self.p.parked_half_size
         p = (*self.ground_anchor(p), p[2])
-        req = AskForRegionRequest(agent_id=self.agent_id, label='parked')
-        req.min_corner = PointStamped()
-        req.max_corner = PointStamped()
-        req.min_corner.header.frame_id = req.max_corner.header.frame_id = C.GLOBAL_FRAME
-        req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z = p[0] - h, p[1] - h, self.arena[2]
-        req.max_corner.point.x, req.max_corner.point.y = p[0] + h, p[1] + h
-        req.max_corner.point.z = p[2] + self.p.parked_height
-        try:
-            self.parked = bool(self.ask_srv(req).success)
-        except Exception:
-            pass                                   # no region manager (yet): try again later
+        box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, p[2] + self.p.parked_height))
+        self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
 
     def _on_cost(self, req: Any) -> GetCostToGoToResponse:
         """get_cost_to_go_to: metres to travel (-1 when the waypoint is invalid or unreachable)."""

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from uav_abstraction_layer.srv import Land as LandSrv
 from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOffRequest
 from mbzirc_arena.boxes import column_box, swept_box
@@ -61,9 +60,8 @@ def gen_empty(goal, agent) -> dict:
 
 
 def hold_box(agent, p):
-    """The box a hovering UAV keeps for itself."""
-    h = agent.p.hold_half_size
-    return (np.array([p[0] - h, p[1] - h, p[2] - h]), np.array([p[0] + h, p[1] + h, p[2] + h]))
+    """The box a hovering UAV keeps for itself (RobotAgent.hold_box)."""
+    return agent.hold_box(p)
 
 
 class TakeOff(AgentTask):

@@ -1,0 +1,114 @@
+"""A deadlock between two UAVs' regions and the step aside that breaks it (fake UAL, simulated clock).
+
+Realistic seed 104: right after take-off UAV 2 (hovering at z 6) and UAV 3 (at z 7.4, 3.3 m north) each
+waited the whole trial for a go_to box that overlapped the other's hold box.
+"""
+import numpy as np
+import pytest
+from geometry_msgs.msg import PoseStamped
+from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
+from mbzirc_comm_objs.srv import AskForRegionRequest
+
+from fake_backend import FakeBackend
+from fake_ual import FakeUal, start_agent, stop_agent
+from mbzirc_arena.boxes import boxes_overlap
+from mbzirc_agents import constants as C
+from mbzirc_agents.region_yield import step_aside_targets
+from shared_regions_manager.core import RegionManager
+
+UAV3_HOLD = ((-1.0, 2.3, 6.4), (1.0, 4.3, 8.4))
+UAV3_GO_TO = ((-1.0, -5.0, 6.4), (1.0, 4.3, 8.4))         # southwards across UAV 2's hold
+
+
+@pytest.fixture
+def two_uavs():
+    """UAV 2 (the agent under test) at its pad; the manager's table shared with a scripted UAV 3. UAV 2 has
+    the lower priority here, so that it is the one named to step aside."""
+    be = FakeBackend()
+    rm = RegionManager(known_agents=['2', '3'], priority=['3', '2'], clock=be.clock.now)
+    ual = FakeUal(be, speedup=8.0, regions=rm)
+    from mbzirc_agents.uav_agent import UavAgent
+    agent = start_agent(UavAgent('2', be, {'region_timeout': 60.0}), be)
+    yield agent, ual, be, rm
+    stop_agent(agent, ual, be)
+
+
+def pose(x, y, z):
+    p = PoseStamped()
+    p.header.frame_id = 'arena'
+    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
+    p.pose.orientation.w = 1.0
+    return p
+
+
+def manager_step(be, rm):
+    """What the region manager node does at its timer: find a deadlock, ask the victim, report its answer."""
+    order = rm.deadlock()
+    if order is None:
+        return None
+    req = AskForRegionRequest(agent_id=order.winner, label=order.winner_label)
+    (req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z) = order.box[0]
+    (req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z) = order.box[1]
+    accepted = be.services['yield_region'](req).success
+    rm.yield_answer(order, accepted)
+    return order, accepted
+
+
+def test_two_uavs_each_waiting_for_the_others_hold_box_no_longer_wait_forever(two_uavs):
+    agent, ual, be, rm = two_uavs
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=6.0))
+    assert s.wait(20) == 'succeeded'
+    assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
+    go = be.servers['go_to_action']
+    go.send(GoToGoal(waypoint=pose(0.0, 8.0, 6.0)))          # northwards across UAV 3's hold
+    orders, granted_at = [], None
+    for _ in range(120):                                      # 60 s: UAV 3 retries at 2 Hz, the manager at 2 Hz
+        if rm.ask('3', 'go_to', *UAV3_GO_TO)[0]:
+            granted_at = be.clock.now()
+            break
+        got = manager_step(be, rm)
+        if got:
+            orders.append(got)
+        be.clock.sleep(0.5)
+    assert granted_at is not None, f'UAV 3 waited for ever (orders: {orders})'
+    assert [(o.victim, o.winner, ok) for o, ok in orders] == [('2', '3', True)]
+    # UAV 2 left UAV 3's box for a place of its own, by the shortest step (down, out of the box's floor)
+    regions = rm.regions()
+    assert not boxes_overlap(regions[('2', 'hold')], regions[('3', 'go_to')])
+    assert ('2', 'step_aside') not in regions
+    assert ual.pos[2] < 5.2 and np.hypot(ual.pos[0], ual.pos[1]) < 0.3
+    # UAV 3 flies through and away: UAV 2's go-to then goes on from where it stepped to
+    rm.free('3', free_all=True)
+    assert go.wait(40) == 'succeeded'
+    assert ual.pos == pytest.approx([0.0, 8.0, 6.0], abs=0.35)
+
+
+def test_a_uav_not_waiting_for_a_region_declines_to_step_aside(two_uavs):
+    agent, ual, be, rm = two_uavs
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=6.0))
+    assert s.wait(20) == 'succeeded'
+    req = AskForRegionRequest(agent_id='3', label='go_to')
+    (req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z) = UAV3_GO_TO[0]
+    (req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z) = UAV3_GO_TO[1]
+    assert not be.services['yield_region'](req).success       # hovering, no task waiting: it may move any time
+    req.min_corner.point.x = float('nan')
+    assert not be.services['yield_region'](req).success
+
+
+def test_step_targets_shortest_first_inside_the_arena_and_never_near_a_wall():
+    box = (np.array([-1.0, -5.0, 6.4]), np.array([1.0, 4.3, 8.4]))
+    targets = step_aside_targets((0.0, 0.0, 6.0), 1.0, box, C.ARENA_BOX, C.BUILDINGS, 1.5, 2.0, 4.0)
+    assert [tuple(np.round(t, 2)) for t in targets] == [(0.0, 0.0, 5.1), (-2.3, 0.0, 6.0), (2.3, 0.0, 6.0),
+                                                        (0.0, 0.0, 9.7)]
+    # beside the tower's west wall (x 11.4), 2 m off: a step east would be into the wall, none is offered there
+    near = (9.4, 12.0, 6.0)
+    box = (np.array([8.0, 5.0, 5.5]), np.array([10.5, 20.0, 6.5]))
+    targets = step_aside_targets(near, 1.0, box, C.ARENA_BOX, C.BUILDINGS, 1.5, 2.0, 4.0)
+    assert targets and all(t[0] <= near[0] + 1e-9 for t in targets)
+    # never below min_z, never longer than max_step
+    low = step_aside_targets((0.0, 0.0, 2.5), 1.0, (np.array([-1.0, -1.0, 2.0]), np.array([1.0, 1.0, 9.0])),
+                             C.ARENA_BOX, C.BUILDINGS, 1.5, 2.0, 2.5)
+    assert [tuple(np.round(t, 2)) for t in low] == [(-2.3, 0.0, 2.5), (2.3, 0.0, 2.5), (0.0, -2.3, 2.5),
+                                                    (0.0, 2.3, 2.5)]
