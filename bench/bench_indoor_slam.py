@@ -20,8 +20,9 @@ the anchor inherits it; under `ideal` GNSS there is none), the error's spread ab
 SLAM's own drift and noise), heading error; hector's CPU
 per scan (its process's CPU over the flight / scans answered) and per simulated second; indoor_pose's and
 ual_sim's CPU per simulated second; the scans' rate and beam count as received.
-    python bench/bench_indoor_slam.py [--uncertainty ideal|realistic] [--rtf 2] [--seed 1]
-Writes bench/results/indoor_slam_<uncertainty>.json.
+    python bench/bench_indoor_slam.py [--uncertainty ideal|realistic] [--rtf 2] [--seed 1] [--no-outline]
+Writes bench/results/indoor_slam_<uncertainty>.json (`--no-outline`: indoor_pose without its refinement
+by the building outline, the anchor as GNSS left it; written to indoor_slam_<uncertainty>_no_outline.json).
 
 What it costs the mission, side by side in one run: the same seed's trial (tools/run_mission.sh, every node)
 without and with `INDOOR_SLAM=1` (hector_mapping + indoor_pose on the UGV and both water UAVs, lasers at
@@ -66,7 +67,8 @@ LAUNCH = """<launch>
     <arg name="uncertainty" value="{uncertainty}"/> <arg name="gnss_denied_indoors" value="true"/>
     <arg name="laser_rate" value="15"/> <arg name="output" value="log"/>
   </include>
-  <include file="$(find mbzirc_launchers)/launch/indoor_slam.launch"><arg name="id" value="2"/></include>
+  <include file="$(find mbzirc_launchers)/launch/indoor_slam.launch"><arg name="id" value="2"/>
+    <arg name="outline_refinement" value="{outline}"/></include>
 </launch>
 """
 
@@ -287,6 +289,7 @@ def main() -> int:
     ap.add_argument("--uncertainty", default="ideal", choices=("ideal", "realistic"))
     ap.add_argument("--rtf", type=float, default=2.0)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--no-outline", action="store_true", help="indoor_pose without the outline refinement")
     ap.add_argument("--mission-seed", type=int, default=None, help="compare a whole trial without/with SLAM")
     ap.add_argument("--mission-duration", type=float, default=400.0, help="sim s of each trial (same for both)")
     args = ap.parse_args()
@@ -297,7 +300,8 @@ def main() -> int:
     os.environ.setdefault("ROS_HOSTNAME", "localhost")
     env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
     with tempfile.NamedTemporaryFile("w", suffix=".launch", delete=False) as f:
-        f.write(LAUNCH.format(seed=args.seed, rtf=args.rtf, uncertainty=args.uncertainty))
+        f.write(LAUNCH.format(seed=args.seed, rtf=args.rtf, uncertainty=args.uncertainty,
+                              outline="false" if args.no_outline else "true"))
         launch_file = f.name
     launch = subprocess.Popen(["roslaunch", "-p", str(port), launch_file], env=env, stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, start_new_session=True)
@@ -329,7 +333,7 @@ def main() -> int:
     scans = pilot.scans
     span = scans[-1][0] - scans[0][0] if len(scans) > 1 else float("nan")
     res = {
-        "uncertainty": args.uncertainty, "seed": args.seed, "rtf_asked": args.rtf, "flight_completed": ok,
+        "uncertainty": args.uncertainty, "outline_refinement": not args.no_outline, "seed": args.seed, "rtf_asked": args.rtf, "flight_completed": ok,
         "sim_s": round(sim_s, 1), "wall_s": round(wall_s, 1), "indoor_samples": len(rows),
         "gnss_error_at_window_m": [[round(v, 3) for v in e] for e in losses],
         "pose_error_rms_m": round(rms(err), 3), "pose_error_max_m": round(max(err, default=float("nan")), 3),
@@ -345,7 +349,7 @@ def main() -> int:
         "load_average": load_averages(),
         "indoor_error_series": [[round(t, 2), round(math.hypot(dx, dy), 3)] for t, dx, dy, _, _ in rows],
     }
-    log(f"indoor SLAM ({args.uncertainty}): flight {'completed' if ok else 'ABORTED'} in {res['sim_s']} sim s; "
+    log(f"indoor SLAM ({args.uncertainty}, outline refinement {'off' if args.no_outline else 'on'}): flight {'completed' if ok else 'ABORTED'} in {res['sim_s']} sim s; "
         f"anchored pose vs truth indoors: RMS {res['pose_error_rms_m']} m, max {res['pose_error_max_m']} m "
         f"({len(rows)} samples); minus the GNSS error at the window {res['gnss_error_at_window_m']}: RMS "
         f"{res['pose_error_minus_gnss_at_window_rms_m']} m, max {res['pose_error_minus_gnss_at_window_max_m']} m; "
@@ -353,7 +357,7 @@ def main() -> int:
     log(f"hector_mapping as launched: {res['hector_cpu_ms_per_scan']} CPU-ms per scan ({slam_n} scans, "
         f"{res['scan_beams']} beams at {res['scan_rate_hz']} Hz); CPU-s per sim s {res['cpu_s_per_sim_s']}; "
         f"load {res['load_average']}")
-    write_result(f"indoor_slam_{args.uncertainty}", res)
+    write_result(f"indoor_slam_{args.uncertainty}" + ("_no_outline" if args.no_outline else ""), res)
     return 0 if ok else 1
 
 

@@ -63,6 +63,13 @@ class Anchor:
         return c * x - s * y + self.tx, s * x + c * y + self.ty, wrap(yaw + self.theta)
 
 
+def compose(outer: Anchor, inner: Anchor) -> Anchor:
+    """outer o inner (inner applied first); keeps inner's fit figures."""
+    c, s = math.cos(outer.theta), math.sin(outer.theta)
+    return Anchor(wrap(outer.theta + inner.theta), c * inner.tx - s * inner.ty + outer.tx,
+                  s * inner.tx + c * inner.ty + outer.ty, inner.residual, inner.pairs)
+
+
 def fit_anchor(slam: np.ndarray, arena: np.ndarray) -> Anchor:
     """Fit arena <- map on (N, 3) rows (x, y, yaw) of paired poses: rotation = circular mean of the heading
     differences, translation = mean position residual after rotating."""
@@ -129,6 +136,10 @@ class IndoorPose:
         self.reported = ReportedPoses()
         self.pairs: deque = deque()           # (t, slam x, y, yaw, arena x, y, yaw)
         self.anchor: Optional[Anchor] = None
+        # applied on top of the anchor (arena side): its refinement by the sensed outline (outline.py);
+        # the identity without one. The checks against the UAL's dead reckoning use the bare anchor.
+        self.correction = Anchor(0.0, 0.0, 0.0)
+        self.frame_changes = 0                # SLAM jumps seen: the map frame may have changed
         self.gnss_valid = True                # until the UAL says otherwise (its status is latched)
         self.lost_at: Optional[float] = None  # when the fix was lost (None: it is valid)
         self.jumped = False                   # the SLAM pose jumped since the fix was lost
@@ -172,6 +183,7 @@ class IndoorPose:
             return None
         if self._is_jump(t, x, y, yaw):
             self.events.append(f"SLAM pose jumped at t={t:.2f} s")
+            self.frame_changes += 1
             if self.gnss_valid:
                 self.pairs.clear()            # its frame changed (a reset?): fit the anchor again
             else:
@@ -189,6 +201,7 @@ class IndoorPose:
         ax, ay, ayaw = self.anchor.apply(x, y, yaw)
         if not self.gnss_valid and rep is not None and not self.jumped:
             self._check_against_dead_reckoning(t, ax, ay, ayaw, rep)
+        ax, ay, ayaw = self.correction.apply(ax, ay, ayaw)
         if rep is not None:
             z = rep[2]
         else:
@@ -205,6 +218,10 @@ class IndoorPose:
         if now - self.last_slam[0] > self.p.slam_timeout:
             return NONE
         return SLAM
+
+    def refined_anchor(self) -> Optional[Anchor]:
+        """arena <- map with the correction applied (what the pose and the TF use); None without anchor."""
+        return None if self.anchor is None else compose(self.correction, self.anchor)
 
     def pop_events(self) -> list[str]:
         ev, self.events = self.events, []
@@ -245,5 +262,5 @@ class IndoorPose:
                 or abs(wrap(yaw - yaw0)) > p.max_yaw_rate * dt + 0.3)
 
 
-__all__ = ["GNSS", "SLAM", "NONE", "Params", "Anchor", "fit_anchor", "ReportedPoses", "Output", "IndoorPose",
+__all__ = ["GNSS", "SLAM", "NONE", "Params", "Anchor", "compose", "fit_anchor", "ReportedPoses", "Output", "IndoorPose",
            "wrap"]

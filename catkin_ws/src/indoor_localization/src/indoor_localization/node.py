@@ -1,27 +1,33 @@
 """ROS adapter of the anchored indoor pose (see the package README for topics and params).
 
-Runs in the robot's namespace: subscribes `ual/pose`, `ual/gnss_status`, `slam_out_pose`; publishes
-`localization/pose`, `localization/source` and the TF arena -> `<ns>/map`.
+Runs in the robot's namespace: subscribes `ual/pose`, `ual/gnss_status`, `slam_out_pose` and (for the
+refinement by the building's outline) `scan`; publishes `localization/pose`, `localization/source` and the TF
+arena -> `<ns>/map`.
 """
 from __future__ import annotations
 
 import math
 import threading
+from collections import deque
 
 import rospy
 from geometry_msgs.msg import PoseStamped, Quaternion, TransformStamped
-from sensor_msgs.msg import NavSatStatus
+from sensor_msgs.msg import LaserScan, NavSatStatus
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
+from mbzirc_arena.arena import load_arena
+from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.messages import GLOBAL_FRAME
 from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .anchor import IndoorPose, Params
+from .outline import IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams, outline_faces, scan_points
 
 SOURCE_CHECK_PERIOD = 0.2    # s of ROS time: how often a silent SLAM pose is noticed
 SOURCE_KEEPALIVE = 1.0       # s: localization/source is sent on change and at least this often
 THROTTLE = 5.0               # s between repeated warnings
+SCAN_STAMP_MATCH = 1e-3      # s: a scan and the SLAM pose hector_mapping made of it share their stamp
 
 
 def yaw_of(q) -> float:
@@ -32,12 +38,76 @@ def quat(yaw: float) -> Quaternion:
     return Quaternion(0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
 
 
+def params_from_ros(cls, prefix: str):
+    """A params dataclass with every field read from `~<prefix><field>` (defaults: the dataclass's)."""
+    defaults = cls()
+    return cls(**{k: type(getattr(defaults, k))(rospy.get_param(f"~{prefix}{k}", getattr(defaults, k)))
+                  for k in cls.__dataclass_fields__})
+
+
+class OutlineRefinement:
+    """The anchor's refinement by the building outline seen in the scans (outline.py), for the node: pairs
+    each scan with the SLAM pose of the same stamp, at most every `~scan_period` s, and smooths the
+    correction it applies. Called from the SLAM pose callback only."""
+
+    def __init__(self) -> None:
+        g = rospy.get_param
+        world = str(g("~world_file", ""))
+        arena = load_arena(world) if world else ARENA
+        self.refiner = OutlineRefiner(outline_faces(arena.footprints), params_from_ros(RefineParams, "outline/"))
+        self.smoother = CorrectionSmoother(float(g("~correction_rate", 1.0)), float(g("~yaw_correction_rate", 0.1)))
+        self.scan_period = float(g("~scan_period", 0.2))
+        self.outdoor_memory = float(g("~outdoor_memory", 10.0))   # s of observations kept while GNSS is valid
+        self.laser_offset = (float(g("~laser_offset_x", 0.0)), float(g("~laser_offset_y", 0.0)))
+        self.scans: deque = deque(maxlen=10)        # (stamp s, LaserScan) waiting for their SLAM pose
+        self.last = -math.inf
+        self.frame_changes = 0
+        self.state = None                          # (observed, yaw_observed) last logged
+
+    def on_scan(self, msg: LaserScan) -> None:
+        self.scans.append((msg.header.stamp.to_sec(), msg))
+
+    def update(self, core: IndoorPose, t: float, pose: tuple, z: float) -> None:
+        """After core.on_slam for a SLAM pose (t, pose in the map frame); z: the robot's height (arena)."""
+        if core.frame_changes != self.frame_changes:      # a SLAM jump: the kept walls are in an old frame
+            self.frame_changes = core.frame_changes
+            self.refiner.reset()
+            self.smoother.reset()
+            core.correction = IDENTITY
+            rospy.logwarn("indoor_pose: outline: SLAM frame changed, refinement starts again")
+        anchor = core.anchor
+        if anchor is None:
+            return
+        if core.gnss_valid:
+            self.refiner.forget_before(t - self.outdoor_memory, anchor)
+        if t - self.last >= self.scan_period or t < self.last:
+            scan = next((m for st, m in tuple(self.scans) if abs(st - t) < SCAN_STAMP_MATCH), None)
+            if scan is not None and math.isfinite(z):
+                self.last = t
+                pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
+                self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset)
+                self._log()
+        at = anchor.apply(pose[0], pose[1], 0.0)[:2]
+        core.correction = self.smoother.step(t, self.refiner.correction.transform, at)
+
+    def _log(self) -> None:
+        for e in self.refiner.pop_events():
+            rospy.logwarn_throttle(THROTTLE, f"indoor_pose: {e}")
+        c = self.refiner.correction
+        if (c.observed, c.yaw_observed) != self.state:
+            self.state = (c.observed, c.yaw_observed)
+            p = c.pivot
+            x, y, _ = c.transform.apply(p[0], p[1], 0.0)
+            rospy.loginfo(f"indoor_pose: outline: {c.observed} direction(s) and {'the' if c.yaw_observed else 'no'} "
+                          f"yaw observed on {c.walls} wall(s): correction ({x - p[0]:+.2f}, {y - p[1]:+.2f}) m, "
+                          f"{c.transform.theta:+.3f} rad; walls {c.thickness:.2f} m thick")
+
+
 class IndoorPoseNode:
     def __init__(self) -> None:
         g = rospy.get_param
-        defaults = Params()
-        self.core = IndoorPose(Params(**{k: type(getattr(defaults, k))(g(f"~{k}", getattr(defaults, k)))
-                                         for k in Params.__dataclass_fields__}))
+        self.core = IndoorPose(params_from_ros(Params, ""))
+        self.outline = OutlineRefinement() if bool(g("~outline_refinement", True)) else None
         ns = rospy.get_namespace().strip("/")
         self.map_frame = str(g("~map_frame", f"{ns}/map" if ns else "map"))
         self.arena_frame = str(g("~arena_frame", GLOBAL_FRAME))
@@ -53,6 +123,8 @@ class IndoorPoseNode:
         self.subs = [rospy.Subscriber("ual/pose", PoseStamped, self.on_reported, queue_size=5),
                      rospy.Subscriber("ual/gnss_status", NavSatStatus, self.on_gnss, queue_size=5),
                      rospy.Subscriber("slam_out_pose", PoseStamped, self.on_slam, queue_size=5)]
+        if self.outline is not None:
+            self.subs.append(rospy.Subscriber("scan", LaserScan, self.outline.on_scan, queue_size=2))
         self.timer = PeriodicTimer(SOURCE_CHECK_PERIOD, self.on_timer, "indoor pose source")
 
     # ---------------------------------------------------------------- callbacks
@@ -76,9 +148,12 @@ class IndoorPoseNode:
                                              f"expected '{self.map_frame}'; ignored")
             return
         p = msg.pose.position
+        t, yaw = msg.header.stamp.to_sec(), yaw_of(msg.pose.orientation)
         with self.lock:
-            out = self.core.on_slam(msg.header.stamp.to_sec(), p.x, p.y, yaw_of(msg.pose.orientation))
-            anchor = self.core.anchor
+            out = self.core.on_slam(t, p.x, p.y, yaw)
+            if self.outline is not None and out is not None:
+                self.outline.update(self.core, t, (p.x, p.y, yaw), out.z)
+            anchor = self.core.refined_anchor()
         self._log()
         if out is None:
             return

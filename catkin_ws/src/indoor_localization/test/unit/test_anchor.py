@@ -170,3 +170,31 @@ def test_a_slam_pose_sliding_off_in_small_steps_indoors_is_caught(slide):
     assert all(o.source == SLAM for t, o in out if 10.5 < t < 20.0)      # the drift alone is no alarm
     assert out[-1][1].source == NONE
     assert any("UAL" in e for e in core.pop_events())
+
+
+def test_a_correction_moves_the_pose_but_not_the_checks_against_dead_reckoning():
+    """The outline's correction (outline.py) is applied on top of the frozen anchor: the pose moves by it,
+    and a correction that changes by 0.6 m and 0.1 rad within a second indoors is no SLAM slide."""
+    core = IndoorPose()
+    bias = (0.4, -0.3)
+    out = []
+    for i in range(int(25 * 30)):
+        t = i / 30.0
+        x, y, yaw = truth(t)
+        if t >= 10.0 and core.gnss_valid:
+            core.on_gnss(t, False)
+        core.on_reported(t, x + bias[0], y + bias[1], 7.5, yaw)
+        if t >= 15.0:      # the correction that takes the bias out (and a yaw about a point), within 1 s
+            k = min(1.0, t - 15.0)
+            c, s = math.cos(0.1 * k), math.sin(0.1 * k)
+            px, py = 14.0 + bias[0], 12.5 + bias[1]
+            core.correction = Anchor(0.1 * k, px - (c * px - s * py) - k * bias[0], py - (s * px + c * py) - k * bias[1])
+        if i % 2 == 0:
+            out.append((t, core.on_slam(t, *to_map(x, y, yaw)), (x, y, yaw)))
+    assert all(o.source == SLAM for t, o, _ in out if t > 10.5)
+    o, tr = out[-1][1], out[-1][2]
+    c, s = math.cos(0.1), math.sin(0.1)
+    rx, ry = tr[0] + bias[0] - 14.0 - bias[0], tr[1] + bias[1] - 12.5 - bias[1]
+    assert (o.x, o.y) == pytest.approx((14.0 + c * rx - s * ry, 12.5 + s * rx + c * ry), abs=0.02)
+    assert wrap(o.yaw - tr[2]) == pytest.approx(0.1, abs=0.01)
+    assert core.refined_anchor().apply(*to_map(*tr))[:2] == pytest.approx((o.x, o.y), abs=1e-9)

@@ -1,0 +1,465 @@
+"""Refining the GNSS anchor by the building's known outline, seen in the laser scan (no ROS).
+
+The anchor (anchor.py) inherits the GNSS error of the last fixes before entering, about a metre. A team
+knows the outer walls before the trial (the buildings' outline, mbzirc_arena), and the laser sees them: the
+facade from outside in front of a window, the outer walls' inner faces from inside. So each processed scan
+is put in the arena frame by the anchor (and the correction found so far), and for every outline wall the
+robot can see from where it is, the returns near that wall's line are fitted with a line (robust: trimmed
+total least squares). A line supported by enough returns spread along the wall is one observation: its
+offset along the wall's normal and its direction. Every observation is kept in the SLAM map frame (which
+hector_mapping keeps consistent indoors and near the building), so the correction is fitted again, on all
+of them, against the anchor of the moment (outdoors the anchor follows GNSS; indoors it is frozen);
+outdoors only the last seconds' observations are kept (`forget_before`), as for the anchor.
+
+The correction is a small rigid 2D transform on the arena side (refined = correction o anchor), found by
+Gauss-Newton on: each wall's offset (constrains the translation along that wall's normal only), each wall's
+direction (the yaw), and a weak prior (nothing moves without evidence). The outer walls' thickness is not
+known (not in the arena model): it is a fourth unknown, seen in a wall's inner face only, and fixed by the
+facade seen from outside plus an inner face, or by two opposite inner faces. Whatever the prior leaves
+uncertain (the posterior std along a direction above `max_std`: one wall only, or only inner faces and an
+unknown thickness) is not corrected: each direction is corrected only once observed.
+
+Interior walls are sensed too; only returns close to a predicted outline line count (the gate is wide
+while the wall's offset is unknown, narrow once it is observed), a line must match the wall's direction,
+and a wall whose observations disagree with the fit of the others is dropped from it.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .anchor import Anchor, compose, wrap
+
+IDENTITY = Anchor(0.0, 0.0, 0.0)
+COVERAGE_BIN = 0.25          # m: bins along a wall line when measuring how the returns spread along it
+
+
+def wrap_half(a):
+    """Angle of an undirected line in [-pi/2, pi/2)."""
+    return (np.asarray(a) + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+
+
+@dataclass(frozen=True)
+class Face:
+    """One outer wall of a building: its outer face from a to b, outward unit normal, normal . p = offset."""
+    building: int
+    name: str
+    a: tuple
+    b: tuple
+    normal: tuple
+    offset: float
+    top: float                   # m: the wall stands up to its building's roof
+
+    @property
+    def direction(self) -> float:
+        """Angle of the wall's line (undirected)."""
+        return float(wrap_half(math.atan2(self.b[1] - self.a[1], self.b[0] - self.a[0])))
+
+    @property
+    def length(self) -> float:
+        return math.hypot(self.b[0] - self.a[0], self.b[1] - self.a[1])
+
+
+def outline_faces(footprints: Sequence[Sequence[float]]) -> list:
+    """The four outer faces of every footprint (x_min, y_min, x_max, y_max, top), as mbzirc_arena gives
+    them (`Arena.footprints`)."""
+    faces = []
+    for k, (x0, y0, x1, y1, top) in enumerate(footprints):
+        faces += [Face(k, "west", (x0, y0), (x0, y1), (-1.0, 0.0), -x0, top),
+                  Face(k, "east", (x1, y0), (x1, y1), (1.0, 0.0), x1, top),
+                  Face(k, "south", (x0, y0), (x1, y0), (0.0, -1.0), -y0, top),
+                  Face(k, "north", (x0, y1), (x1, y1), (0.0, 1.0), y1, top)]
+    return faces
+
+
+def scan_points(ranges, angle_min: float, angle_increment: float, range_min: float = 0.0,
+                range_max: float = math.inf) -> np.ndarray:
+    """(N, 2) returns in the laser frame; NaN, inf and out-of-range beams are dropped."""
+    r = np.asarray(ranges, dtype=float)
+    a = angle_min + angle_increment * np.arange(r.size)
+    ok = np.isfinite(r) & (r >= range_min) & (r <= range_max)
+    return np.column_stack((r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])))
+
+
+def theil_sen(u: np.ndarray, v: np.ndarray, samples: int = 40) -> np.ndarray:
+    """v's robust straight-line fit against u (median of pairwise slopes over an even subsample),
+    evaluated at u."""
+    idx = np.linspace(0, len(u) - 1, min(samples, len(u))).astype(int)
+    us, vs = u[idx], v[idx]
+    i, j = np.triu_indices(len(idx), 1)
+    du = us[j] - us[i]
+    ok = np.abs(du) > 1e-6
+    slope = float(np.median((vs[j] - vs[i])[ok] / du[ok])) if ok.any() else 0.0
+    return slope * u + float(np.median(v - slope * u))
+
+
+def transform(points: np.ndarray, theta: float, tx: float, ty: float) -> np.ndarray:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.column_stack((c * points[:, 0] - s * points[:, 1] + tx, s * points[:, 0] + c * points[:, 1] + ty))
+
+
+@dataclass(frozen=True)
+class RefineParams:
+    gate_unobserved: float = 1.2     # m around a wall's predicted line while its offset is not observed
+    gate: float = 0.3                # m once observed (plus 3 std of the prediction)
+    min_points: int = 15             # returns supporting a wall line
+    min_span: float = 1.5            # m of wall the supporting returns must spread over ...
+    min_coverage: float = 0.5        # ... with returns in this share of its 0.25 m stretches
+    max_line_rms: float = 0.15       # m: a noisier line is not a wall
+    max_line_angle: float = 0.2      # rad between a line and its wall (anchor's yaw error included)
+    wall_sigma: float = 0.05         # m: a wall's offset as observed (SLAM, flatness), however many scans
+    angle_sigma: float = 0.02        # rad: likewise its direction
+    prior_sigma: float = 1.5         # m: the GNSS error the anchor may carry
+    yaw_prior_sigma: float = 0.1     # rad
+    thickness: float = 0.25          # m: prior of the outer walls' thickness (not in the arena model) ...
+    thickness_sigma: float = 0.25    # m ... and its std (set small if it is known)
+    max_std: float = 0.1             # m: a direction is corrected once the correction's std along it is below
+    max_yaw_std: float = 0.03        # rad: likewise the yaw
+    max_correction: float = 1.5      # m: a larger fitted correction is rejected
+    max_yaw_correction: float = 0.15  # rad
+    max_wall_residual: float = 0.25  # m: a wall whose observations the fit misses by more is dropped
+    observations_per_wall: int = 20  # the latest ones kept per wall and side
+
+
+@dataclass(frozen=True)
+class WallObservation:
+    """A wall line seen in one scan, in the SLAM map frame."""
+    t: float
+    face: int                        # index into the faces
+    inner: bool                      # its inner face (seen from inside) or its outer face
+    centroid: tuple                  # map frame
+    angle: float                     # map frame, undirected
+    points: int
+    sigma_offset: float              # m: the line's offset std from its returns
+    sigma_angle: float               # rad
+
+
+@dataclass(frozen=True)
+class Correction:
+    """correction (an Anchor: arena-side rigid transform), the fit's state for logs and gates."""
+    transform: Anchor
+    thickness: float
+    observed: int                    # translation directions corrected: 0, 1 or 2
+    yaw_observed: bool
+    walls: int                       # walls (face, side) in the fit
+    cov: np.ndarray = field(repr=False, default=None)   # (dx, dy, dyaw, thickness) at `pivot`
+    pivot: tuple = (0.0, 0.0)
+
+
+class OutlineRefiner:
+    """Feed it scans with the SLAM pose at their stamp and the anchor of the moment; `correction` is the
+    refinement to compose on the anchor. `events` says what a node should log."""
+
+    def __init__(self, faces: Sequence[Face], params: RefineParams = RefineParams()):
+        self.faces = list(faces)
+        self.p = params
+        self.walls: dict = {}            # (face, inner) -> deque of WallObservation
+        self.dropped: set = set()        # walls the last fit dropped as inconsistent
+        self.correction = self._no_correction()
+        self.events: list = []
+
+    def _no_correction(self) -> Correction:
+        p = self.p
+        return Correction(IDENTITY, p.thickness, 0, False, 0,
+                          np.diag([p.prior_sigma ** 2] * 2 + [p.yaw_prior_sigma ** 2, p.thickness_sigma ** 2]))
+
+    def forget_before(self, t: float, anchor: Anchor) -> None:
+        """Drop the observations made before t. Outdoors, where hector_mapping's pose may wander far from
+        anything (its README, "Known limitations"), only the last seconds before entering count, as for the
+        anchor; indoors nothing is forgotten (the walls are seen again and again, the last ones kept)."""
+        before = sum(len(q) for q in self.walls.values())
+        for key in list(self.walls):
+            q = self.walls[key]
+            while q and q[0].t < t:
+                q.popleft()
+            if not q:
+                del self.walls[key]
+        if not self.walls:
+            self.correction = self._no_correction()
+        elif sum(len(q) for q in self.walls.values()) < before:
+            self._fit(anchor)
+
+    def reset(self) -> None:
+        """The SLAM map frame changed (a jump): the kept observations no longer hold."""
+        self.walls.clear()
+        self.dropped.clear()
+        self.correction = self._no_correction()
+
+    # ---------------------------------------------------------------- one scan
+    def on_scan(self, t: float, pose: tuple, z: float, anchor: Anchor, points: np.ndarray,
+                laser_offset: tuple = (0.0, 0.0)) -> list:
+        """pose: the SLAM pose (x, y, yaw) at the scan's stamp (map frame); z: the laser's height in the
+        arena; points: (N, 2) returns in the laser frame. Returns the wall observations it made (and keeps
+        them); fits the correction again when there is one."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        origin = (x + c * laser_offset[0] - s * laser_offset[1], y + s * laser_offset[0] + c * laser_offset[1])
+        in_map = transform(points, yaw, *origin) if len(points) else np.zeros((0, 2))
+        refined = compose(self.correction.transform, anchor)
+        robot = refined.apply(origin[0], origin[1], 0.0)[:2]
+        pts = transform(in_map, refined.theta, refined.tx, refined.ty)
+        found = []
+        for k, inner in self._visible_faces(robot, z):
+            obs = self._observe(t, k, inner, pts, in_map, refined)
+            if obs is not None:
+                found.append(obs)
+                self.walls.setdefault((k, inner), deque(maxlen=self.p.observations_per_wall)).append(obs)
+        if found:
+            self._fit(anchor)
+        return found
+
+    def _visible_faces(self, robot: tuple, z: float) -> list:
+        """(face index, inner) of the walls the robot can see from where it is: inside a building (under its
+        roof), that building's inner faces; outside, the outer faces turned towards it. A wall whose line
+        the robot is within the gate of (in its window: which side the robot is on is not clear) is left
+        out, and does not decide inside or outside; the others still count (from a window, the room)."""
+        standing = [k for k, f in enumerate(self.faces) if f.top > z]
+        side = {k: self._side(k, robot) for k in standing}
+        clear = {k for k in standing if not (abs(side[k]) < self._gate(k, False)
+                                             and -0.5 < self._along(self.faces[k], np.array([robot]))[0]
+                                             < self.faces[k].length + 0.5)}
+        buildings = {self.faces[k].building for k in standing}
+        outside = {self.faces[k].building for k in clear if side[k] > 0.0}
+        inside = buildings - outside
+        if inside:
+            return [(k, True) for k in clear if self.faces[k].building in inside]
+        return [(k, False) for k in clear if side[k] > 0.0]
+
+    def _side(self, k: int, xy: tuple) -> float:
+        """Signed distance of xy from face k's outer line (> 0 outside)."""
+        f = self.faces[k]
+        return f.normal[0] * xy[0] + f.normal[1] * xy[1] - f.offset
+
+    @staticmethod
+    def _along(f: Face, pts: np.ndarray) -> np.ndarray:
+        ux, uy = (f.b[0] - f.a[0]) / f.length, (f.b[1] - f.a[1]) / f.length
+        return (pts[:, 0] - f.a[0]) * ux + (pts[:, 1] - f.a[1]) * uy
+
+    def _gate(self, k: int, inner: bool) -> float:
+        """How far from a wall's predicted line its returns may lie: the prediction's std (3 sigma) + the
+        tight gate, up to the wide one."""
+        f, cov = self.faces[k], self.correction.cov
+        j = np.array([f.normal[0], f.normal[1], 0.0, -1.0 if inner else 0.0])
+        std = math.sqrt(max(float(j @ cov @ j), 0.0))
+        return min(self.p.gate_unobserved, self.p.gate + 3.0 * std)
+
+    def _observe(self, t: float, k: int, inner: bool, pts: np.ndarray, in_map: np.ndarray,
+                 refined: Anchor) -> Optional[WallObservation]:
+        """The wall line in this scan's returns (arena frame pts, map frame in_map), or None."""
+        p, f = self.p, self.faces[k]
+        if not len(pts):
+            return None
+        line = f.offset - (self.correction.thickness if inner else 0.0)
+        d = pts @ np.array(f.normal) - line
+        along = self._along(f, pts)
+        sel = (np.abs(d) < self._gate(k, inner)) & (along > -0.3) & (along < f.length + 0.3)
+        if sel.sum() < p.min_points:
+            return None
+        # robust line: start from the returns near a Theil-Sen line of offset against place along the wall
+        # (a perpendicular interior wall meeting this one spreads its returns across the gate; the yaw
+        # error tilts the wall's), then trimmed total least squares
+        keep = np.abs(d[sel] - theil_sen(along[sel], d[sel])) < max(0.5 * p.gate, 0.1)
+        q = in_map[sel][keep]
+        for _ in range(3):
+            if len(q) < p.min_points:
+                return None
+            centroid = q.mean(axis=0)
+            direction, normal = np.linalg.svd(q - centroid, full_matrices=False)[2]
+            res = (q - centroid) @ normal
+            inl = np.abs(res) < 3.0 * max(1.4826 * float(np.median(np.abs(res))), 0.01)
+            if inl.all():
+                break
+            q = q[inl]
+        else:
+            if len(q) < p.min_points:
+                return None
+            centroid = q.mean(axis=0)
+            res = (q - centroid) @ normal
+        u = (q - centroid) @ direction
+        span = float(u.max() - u.min())
+        bins = np.unique(np.floor((u - u.min()) / COVERAGE_BIN)).size
+        rms = float(np.sqrt(np.mean(res ** 2)))
+        angle = float(wrap_half(math.atan2(direction[1], direction[0])))
+        off_angle = float(wrap_half(angle + refined.theta - f.direction))
+        if (span < p.min_span or bins < p.min_coverage * (span / COVERAGE_BIN + 1.0) or rms > p.max_line_rms
+                or abs(off_angle) > p.max_line_angle):
+            return None
+        rms = max(rms, 0.005)
+        return WallObservation(t, k, inner, (float(centroid[0]), float(centroid[1])), angle, len(q),
+                               rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3))
+
+    # ---------------------------------------------------------------- the correction
+    def _fit(self, anchor: Anchor) -> None:
+        """Fit the correction on every kept observation against `anchor`. A wall that the fit of the others
+        predicts well but misses by more than `max_wall_residual` is left out (the worst first, one at a
+        time): a fit on all of them would spread its error over the others and the thickness."""
+        rows = self._rows(anchor)
+        if rows is None:
+            return
+        self.dropped.clear()
+        use = np.ones(len(rows["key"]), dtype=bool)
+        while True:
+            worst = None
+            for key in {k for k, u in zip(rows["key"], use) if u}:
+                mine = np.array([k == key for k in rows["key"]])
+                others = self._solve(rows, use & ~mine)
+                if others is None:
+                    continue
+                res, std = self._wall_residual(rows, mine, others)
+                if std < self.p.max_std and abs(res) > self.p.max_wall_residual and (
+                        worst is None or abs(res) > abs(worst[1])):
+                    worst = (key, res)
+            if worst is None:
+                break
+            self.dropped.add(worst[0])
+            use &= np.array([k != worst[0] for k in rows["key"]])
+            f = self.faces[worst[0][0]]
+            self.events.append(f"outline: wall {f.name} ({'inner' if worst[0][1] else 'outer'} face) is "
+                               f"{worst[1]:+.2f} m off the fit of the others: left out")
+        x = self._solve(rows, use)
+        if x is None:
+            return
+        corr = self._correction(rows, use, *x)
+        shift = self._shift_at_pivot(corr)
+        if shift > self.p.max_correction or abs(corr.transform.theta) > self.p.max_yaw_correction:
+            self.events.append(f"outline: fitted correction {shift:.2f} m, {corr.transform.theta:+.3f} rad is "
+                               f"beyond the bounds ({self.p.max_correction} m, {self.p.max_yaw_correction} rad): "
+                               f"rejected, keeping the previous one")
+            return
+        self.correction = corr
+
+    @staticmethod
+    def _shift_at_pivot(corr: Correction) -> float:
+        x, y, _ = corr.transform.apply(corr.pivot[0], corr.pivot[1], 0.0)
+        return math.hypot(x - corr.pivot[0], y - corr.pivot[1])
+
+    def _rows(self, anchor: Anchor) -> Optional[dict]:
+        """The kept observations as arrays in the arena frame under `anchor`: wall key, face normal, outer
+        offset, inner flag, centroid, line angle minus the wall's, weights (each wall counts as one
+        observation however many scans saw it); the pivot (their weighted centre)."""
+        p = self.p
+        obs = [(key, o, len(q)) for key, q in self.walls.items() for o in q]
+        if not obs:
+            return None
+        f = [self.faces[o.face] for _, o, _ in obs]
+        c, s = math.cos(anchor.theta), math.sin(anchor.theta)
+        m = np.array([o.centroid for _, o, _ in obs])
+        g = np.column_stack((c * m[:, 0] - s * m[:, 1] + anchor.tx, s * m[:, 0] + c * m[:, 1] + anchor.ty))
+        n_obs = np.array([n for _, _, n in obs], dtype=float)
+        w_off = 1.0 / (n_obs * (np.array([o.sigma_offset for _, o, _ in obs]) ** 2 + p.wall_sigma ** 2))
+        rows = {"key": [key for key, _, _ in obs], "normal": np.array([fk.normal for fk in f]),
+                "offset": np.array([fk.offset for fk in f]),
+                "inner": np.array([o.inner for _, o, _ in obs], dtype=float), "g": g,
+                "angle": wrap_half(np.array([o.angle + anchor.theta - fk.direction for (_, o, _), fk in zip(obs, f)])),
+                "w_off": w_off,
+                "w_ang": 1.0 / (n_obs * (np.array([o.sigma_angle for _, o, _ in obs]) ** 2 + p.angle_sigma ** 2))}
+        rows["pivot"] = (w_off[:, None] * g).sum(axis=0) / w_off.sum()
+        return rows
+
+    def _offset_residuals(self, rows: dict, x: np.ndarray) -> tuple:
+        """Each row's offset residual under x = (dx, dy at the pivot, dyaw, thickness), and its Jacobian."""
+        c, s = math.cos(x[2]), math.sin(x[2])
+        rel = rows["g"] - rows["pivot"]
+        moved = rows["pivot"] + np.column_stack((c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1])) + x[:2]
+        n = rows["normal"]
+        r = (n * moved).sum(axis=1) - rows["offset"] + rows["inner"] * x[3]
+        drot = np.column_stack((-s * rel[:, 0] - c * rel[:, 1], c * rel[:, 0] - s * rel[:, 1]))
+        jac = np.column_stack((n[:, 0], n[:, 1], (n * drot).sum(axis=1), rows["inner"]))
+        return r, jac
+
+    def _solve(self, rows: dict, use: np.ndarray) -> Optional[tuple]:
+        """(x, covariance) by Gauss-Newton on the rows in `use` and the prior; None without rows."""
+        if not use.any():
+            return None
+        p = self.p
+        prior = np.array([0.0, 0.0, 0.0, p.thickness])
+        prior_info = np.diag([p.prior_sigma ** -2] * 2 + [p.yaw_prior_sigma ** -2, p.thickness_sigma ** -2])
+        w_off, w_ang = rows["w_off"] * use, rows["w_ang"] * use
+        x = prior.copy()
+        for _ in range(5):
+            r, jac = self._offset_residuals(rows, x)
+            ra = rows["angle"] + x[2]
+            h = prior_info + (jac * w_off[:, None]).T @ jac
+            h[2, 2] += w_ang.sum()
+            b = prior_info @ (prior - x) - jac.T @ (w_off * r)
+            b[2] -= (w_ang * ra).sum()
+            step = np.linalg.solve(h, b)
+            x = x + step
+            if np.abs(step).max() < 1e-7:
+                break
+        return x, np.linalg.inv(h)
+
+    def _wall_residual(self, rows: dict, mine: np.ndarray, fit: tuple) -> tuple:
+        """A wall's mean offset residual under a fit without it, and the fit's std of that prediction."""
+        x, cov = fit
+        r, jac = self._offset_residuals(rows, x)
+        w = rows["w_off"] * mine
+        j = (jac * w[:, None]).sum(axis=0) / w.sum()
+        return float((w * r).sum() / w.sum()), math.sqrt(max(float(j @ cov @ j), 0.0))
+
+    def _correction(self, rows: dict, use: np.ndarray, x: np.ndarray, cov: np.ndarray) -> Correction:
+        """The fitted x as a correction, each direction corrected only once observed."""
+        p = self.p
+        shift, dyaw = x[:2].copy(), float(x[2])
+        vals, vecs = np.linalg.eigh(cov[:2, :2])
+        observed = 0
+        for val, v in zip(vals, vecs.T):
+            if math.sqrt(max(val, 0.0)) > p.max_std:
+                shift -= float(v @ shift) * v
+            else:
+                observed += 1
+        yaw_observed = math.sqrt(cov[2, 2]) <= p.max_yaw_std
+        if not yaw_observed:
+            dyaw = 0.0
+        pivot = rows["pivot"]
+        c, s = math.cos(dyaw), math.sin(dyaw)
+        t = pivot + shift - np.array([c * pivot[0] - s * pivot[1], s * pivot[0] + c * pivot[1]])
+        walls = len({k for k, u in zip(rows["key"], use) if u})
+        return Correction(Anchor(dyaw, float(t[0]), float(t[1])), float(x[3]), observed, yaw_observed, walls,
+                          cov, (float(pivot[0]), float(pivot[1])))
+
+    def pop_events(self) -> list:
+        ev, self.events = self.events, []
+        return ev
+
+
+class CorrectionSmoother:
+    """The correction actually applied: it follows the fitted one at a bounded rate, measured at the
+    robot (so a newly observed direction does not make the pose jump)."""
+
+    def __init__(self, rate: float = 1.0, yaw_rate: float = 0.1):
+        self.rate, self.yaw_rate = rate, yaw_rate       # m/s, rad/s
+        self.applied = IDENTITY
+        self.t: Optional[float] = None
+
+    def reset(self) -> None:
+        self.applied, self.t = IDENTITY, None
+
+    def step(self, t: float, target: Anchor, at: tuple) -> Anchor:
+        """Move the applied correction towards target, measured at `at` (x, y arena), and return it."""
+        dt = 0.0 if self.t is None else max(t - self.t, 0.0)
+        self.t = t
+        a = self.applied
+        ax, ay, _ = a.apply(at[0], at[1], 0.0)
+        bx, by, _ = target.apply(at[0], at[1], 0.0)
+        dx, dy = bx - ax, by - ay
+        dist = math.hypot(dx, dy)
+        lim = self.rate * dt
+        if dist > lim:
+            dx, dy = dx * lim / dist, dy * lim / dist
+        dth = wrap(target.theta - a.theta)
+        dth = max(-self.yaw_rate * dt, min(self.yaw_rate * dt, dth))
+        theta = wrap(a.theta + dth)
+        c, s = math.cos(theta), math.sin(theta)
+        # new(q) = R(theta) (q - at) + (applied(at) + step)
+        px, py = ax + dx, ay + dy
+        self.applied = Anchor(theta, px - (c * at[0] - s * at[1]), py - (s * at[0] + c * at[1]))
+        return self.applied
+
+
+__all__ = ["Face", "outline_faces", "scan_points", "transform", "RefineParams", "WallObservation",
+           "Correction", "OutlineRefiner", "CorrectionSmoother", "IDENTITY", "wrap_half"]
