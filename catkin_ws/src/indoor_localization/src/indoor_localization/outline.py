@@ -302,9 +302,16 @@ class OutlineRefiner:
             return
         self.dropped.clear()
         use = np.ones(len(rows["key"]), dtype=bool)
+        x = self._solve(rows, use)
         while True:
+            # the fit of all walls spreads a wrong wall's error; while none is missed by half the limit
+            # there is no wall to leave out (and the leave-one-out fits are not worth their CPU)
+            keys = {k for k, u in zip(rows["key"], use) if u}
+            if x is None or max(abs(self._wall_residual(rows, np.array([k == key for k in rows["key"]]), x)[0])
+                                for key in keys) <= 0.5 * self.p.max_wall_residual:
+                break
             worst = None
-            for key in {k for k, u in zip(rows["key"], use) if u}:
+            for key in keys:
                 mine = np.array([k == key for k in rows["key"]])
                 others = self._solve(rows, use & ~mine)
                 if others is None:
@@ -320,7 +327,7 @@ class OutlineRefiner:
             f = self.faces[worst[0][0]]
             self.events.append(f"outline: wall {f.name} ({'inner' if worst[0][1] else 'outer'} face) is "
                                f"{worst[1]:+.2f} m off the fit of the others: left out")
-        x = self._solve(rows, use)
+            x = self._solve(rows, use)
         if x is None:
             return
         corr = self._correction(rows, use, *x)
