@@ -100,6 +100,12 @@ class AgentParams:
     opening_keep_off: float = _param(0.6, 'm: in an opening, no velocity towards a laser return nearer than '
                                      'this (from the laser, the robot centre)')
     indoor_fire_distance: float = _param(1.5, 'm from an indoor fire while shooting')
+    leg_guard: bool = _param(True, 'indoor straight legs (move, indoor go_to) stop and fail when the laser (`scan`) '
+                             'sees a return ahead on them (leg_guard.py)')
+    leg_guard_half_width: float = _param(0.6, 'm either side of the leg where a laser return blocks it: the '
+                                         "robot's half width plus a margin")
+    leg_guard_stop_distance: float = _param(0.9, 'm ahead of the robot centre (the laser) within which a return '
+                                            'in that corridor stops the leg: its radius plus a stopping gap')
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')

@@ -89,9 +89,11 @@ def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav, z_shift):
 
 def test_the_straight_leg_of_old_hits_the_frame(uav):
     """The same entry without the laser (~laser_openings false): the UAV crosses the wall outside the
-    window, a crash in the simulator (the check above can fail)."""
+    window, a crash in the simulator (the check above can fail). Without the leg guard too (leg_guard.py:
+    test_leg_guard.py, the guarded straight leg stops before the frame)."""
     agent, ual, be, scene = uav
     agent.p.laser_openings = False
+    agent.p.leg_guard = False
     track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
     s, status = enter(be)
     assert status == 'succeeded', s.result.message

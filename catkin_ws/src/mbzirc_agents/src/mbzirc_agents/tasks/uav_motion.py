@@ -16,6 +16,7 @@ from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
+from ..leg_guard import LegGuard
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
@@ -130,8 +131,15 @@ class GoTo(AgentTask):
     Args (task_args): straight (False): fly one straight leg (entering through a window); true_height
     (False): the waypoint's z is a true height (the arena model's), flown corrected by the UAV's vertical
     GNSS error (UavAgent.at_true_height), not a GNSS one (a sensed object's, a pose's).
+
+    A straight leg (indoors, or asked for) stops and fails when the laser sees a return ahead on it
+    (leg_guard.py): indoors the waypoints come with the GNSS error, a metre or more.
     """
     INPUT_KEYS = ['waypoint']
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.guard = LegGuard(self)
 
     def run(self, ud) -> str:
         a = self.agent
@@ -152,14 +160,19 @@ class GoTo(AgentTask):
                             'refused (enter through a window)')
         indoors = start_in or target_in
         # indoors (or entering / leaving through a window) the caller's waypoints are the path
-        legs = [tuple(target)] if self.args.get('straight') or indoors else self._legs(start[:3], target)
+        straight = bool(self.args.get('straight')) or indoors
+        legs = [tuple(target)] if straight else self._legs(start[:3], target)
         margin = a.p.region_margin
         for i, leg in enumerate(legs):
             here = a.position()
             self.feedback('WAITING_REGION', f'leg {i + 1}/{len(legs)}: reserving the way to {_fmt(leg)}')
             a.reserve(self, 'go_to', swept_box(here[:3], leg, margin))
             leg_yaw = yaw if i == len(legs) - 1 else None
-            a.move_to(self, leg, leg_yaw, f'leg {i + 1}/{len(legs)} to {_fmt(leg)}')
+            what = f'leg {i + 1}/{len(legs)} to {_fmt(leg)}'
+            if straight:
+                self.guard.move(leg, leg_yaw, what)
+            else:
+                a.move_to(self, leg, leg_yaw, what)
             a.reserve(self, 'hold', hold_box(a, a.position()))
             a.free('go_to')
         self.result['message'] = f'at {_fmt(a.position()[:3])}'

@@ -11,15 +11,21 @@ from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
+from ..leg_guard import LegGuard
 from .indoor import SearchIndoor
 
 
 class UgvGoTo(AgentTask):
     """Drive to a waypoint (z ignored): a 2D plan around the building footprints, leg by leg.
 
-    Args (task_args): straight (False): one straight leg (indoors, through the door).
+    Args (task_args): straight (False): one straight leg (indoors, through the door), stopped and failed
+    when the laser sees a return ahead on it (leg_guard.py).
     """
     INPUT_KEYS = ['waypoint']
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.guard = LegGuard(self)
 
     def run(self, ud) -> str:
         a = self.agent
@@ -35,8 +41,11 @@ class UgvGoTo(AgentTask):
         for i, (x, y) in enumerate(legs):
             last = i == len(legs) - 1
             leg_yaw = yaw if last and yaw is not None else math.atan2(y - a.position()[1], x - a.position()[0])
-            a.move_to(self, (x, y, here[2]), leg_yaw, f'leg {i + 1}/{len(legs)} to ({x:.1f}, {y:.1f})',
-                      tolerance=0.4)
+            what = f'leg {i + 1}/{len(legs)} to ({x:.1f}, {y:.1f})'
+            if self.args.get('straight'):
+                self.guard.move((x, y, here[2]), leg_yaw, what, tolerance=0.4)
+            else:
+                a.move_to(self, (x, y, here[2]), leg_yaw, what, tolerance=0.4)
         self.result['message'] = f'at ({target[0]:.1f}, {target[1]:.1f})'
         return C.SUCCESS
 

@@ -1,0 +1,158 @@
+"""Leg guard: an indoor straight leg stops before a laser return ahead, and fails saying so.
+
+Why: indoors the legs are straight lines between the caller's waypoints, driven or flown on GNSS, whose
+error is a metre or more and wanders. A leg whose end is truly inside a wall is driven into it (realistic
+seed 106: the UGV's leg back towards an interior doorway, its GNSS fix about 1.6 m east of the truth by
+where it hit, ended in the interior wall beside the doorway; no doorway was across the leg, so no laser
+passage, and the straight drive went on into the wall, which stood in the laser's plane all the way). The
+robot's own laser measures the walls as they are, whatever its GNSS error says.
+
+Rules:
+- the corridor of a leg is the strip ahead of the robot along the leg's horizontal direction (from where the
+  robot is now to the leg's end, less its arrival tolerance: there it is done), `half_width` either side
+  (the robot's half width plus a margin), its end rounded (a disc of that radius);
+- a scan's returns are placed in the arena frame with the pose the robot had when the scan arrived, then
+  seen from the pose of now (the robot moved since: at 1 m/s a scan 0.3 s old is 0.3 m nearer);
+- the leg is blocked when at least MIN_BEAMS returns lie in the corridor no farther than `stop_distance`
+  ahead of the robot's centre (the laser's origin): one stray return (noise) does not stop a leg, a wall
+  gives dozens; REP 117 -inf (closer than the minimum range) counts as a return at the minimum range,
+  NaN and +inf (no return) do not count;
+- a leg with no more than the arrival tolerance to go is not guarded (the robot is there: it turns on the
+  spot); returns beside or behind the robot never block (a door frame it passes, the wall it came through);
+- without a fresh scan the leg goes on (a throttled error says so): the guard adds a check, it is not
+  what moves the robot.
+Pure geometry here (no ROS): `scan_points`, `corridor_distances`, `blocking_distance`; `LegGuard` is a
+task's use of it (its scan subscription and the check passed to `RobotAgent.move_to`'s stop_when).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Optional, Sequence, Tuple
+
+import numpy as np
+from sensor_msgs.msg import LaserScan
+
+from . import constants as C
+from .agent_task import TaskError
+
+MIN_BEAMS = 2              # returns in the corridor that make it blocked (one stray beam does not)
+
+
+def scan_points(ranges: Sequence[float], angle_min: float, angle_increment: float, pose: Sequence[float],
+                range_min: float = 0.0, range_max: float = math.inf) -> np.ndarray:
+    """(N, 2) arena x, y of the scan's returns, the laser at pose (x, y, z, yaw) of base_link: -inf is a
+    return at range_min, NaN, +inf and ranges beyond range_max are no return."""
+    r = np.asarray(ranges, dtype=float)
+    r = np.where(r == -math.inf, float(range_min), r)
+    ok = np.isfinite(r) & (r >= 0.0) & (r <= range_max)
+    a = float(pose[3]) + float(angle_min) + float(angle_increment) * np.arange(r.size)
+    r, a = r[ok], a[ok]
+    return np.column_stack((pose[0] + r * np.cos(a), pose[1] + r * np.sin(a)))
+
+
+def corridor_distances(points: np.ndarray, origin: Sequence[float], direction: Sequence[float],
+                       half_width: float, reach: float) -> np.ndarray:
+    """Distances ahead (along the unit `direction`) of the points within half_width of the line from origin
+    along direction, ahead of origin and no farther than reach."""
+    if len(points) == 0:
+        return np.zeros(0)
+    u = np.asarray(direction, dtype=float)[:2]
+    rel = np.asarray(points, dtype=float) - np.asarray(origin, dtype=float)[:2]
+    along = rel @ u
+    aside = rel @ np.array([-u[1], u[0]])
+    keep = (along > 0.0) & (along <= reach) & (np.abs(aside) <= half_width)
+    return along[keep]
+
+
+def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequence[float], half_width: float,
+                      stop_distance: float, min_leg: float) -> Optional[float]:
+    """The distance ahead of the nearest return blocking the leg from here to target (x, y), None when it
+    is clear or has no more than min_leg (its arrival tolerance) to go. A return blocks when it is at most
+    stop_distance ahead and within half_width of the way still to go, which ends min_leg short of target
+    (there the leg is done): a leg ending short of a wall is not blocked by it."""
+    d = np.asarray(target[:2], dtype=float) - np.asarray(here[:2], dtype=float)
+    length = float(np.hypot(d[0], d[1]))
+    if length <= min_leg:
+        return None
+    u = d / length
+    ahead = corridor_distances(points, here, u, half_width, stop_distance)
+    if ahead.size:
+        rel = np.asarray(points, dtype=float) - np.asarray(here[:2], dtype=float)
+        along, aside = rel @ u, rel @ np.array([-u[1], u[0]])
+        end = length - min_leg
+        beyond = np.hypot(np.maximum(along - end, 0.0), aside)       # off the way to go (its end a disc)
+        ahead = along[(along > 0.0) & (along <= stop_distance) & (beyond <= half_width)]
+    return float(ahead.min()) if ahead.size >= MIN_BEAMS else None
+
+
+class LegGuard:
+    """A motion task's check of its straight legs against its laser (`scan`).
+
+    Args:
+        task: the AgentTask that moves.
+    """
+
+    def __init__(self, task: Any) -> None:
+        self.task = task
+        self.agent = task.agent
+        self._scan: Optional[Tuple[Any, float, np.ndarray]] = None     # (LaserScan, receive time, pose then)
+        self.reason = ''                                                 # why the last check blocked
+        # always (not only while the task runs): a leg checks the scan of before its start, not none
+        task.iface.add_subscriber(None, 'scan', LaserScan, self._on_scan)
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        """Keep the latest scan with the pose of its arrival; a malformed one is ignored (passage.py says so)."""
+        if not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment):
+            return
+        try:
+            pose = self.agent.position(wait=0.0)
+        except TaskError:
+            return
+        self._scan = (msg, self.agent.backend.now(), pose)
+
+    def _fresh(self) -> Optional[Tuple[Any, np.ndarray]]:
+        scan = self._scan
+        if scan is None or self.agent.backend.now() - scan[1] > C.SCAN_MAX_AGE:
+            return None
+        return scan[0], scan[2]
+
+    def stop_when(self, target: Sequence[float], tolerance: float):
+        """A stop_when for RobotAgent.move_to on the straight leg to target: True (and `reason` set) when the
+        laser sees the leg blocked; always False with ~leg_guard off."""
+        def blocked() -> bool:
+            a = self.agent
+            if not a.p.leg_guard:
+                return False
+            fresh = self._fresh()
+            if fresh is None:
+                a.backend.logerr_throttle(5.0, f'[{self.task.name}] leg guard: no fresh laser scan, the leg goes '
+                                                'on unchecked')
+                return False
+            msg, then = fresh
+            points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, then, msg.range_min,
+                                 msg.range_max if msg.range_max > 0 else math.inf)
+            here = a.position()
+            d = blocking_distance(points, here, target, a.p.leg_guard_half_width, a.p.leg_guard_stop_distance,
+                                  tolerance)
+            if d is None:
+                return False
+            left = math.hypot(target[0] - here[0], target[1] - here[1])
+            self.reason = (f'a laser return {d:.2f} m ahead blocks the leg to ({target[0]:.1f}, {target[1]:.1f}) '
+                           f'({left:.1f} m left; guard: {a.p.leg_guard_stop_distance:.2f} m ahead, '
+                           f'+-{a.p.leg_guard_half_width:.2f} m aside): holding')
+            return True
+        return blocked
+
+    def move(self, target: Sequence[float], yaw: Optional[float], what: str,
+             tolerance: Optional[float] = None) -> None:
+        """RobotAgent.move_to along the straight leg to target, guarded: TaskError (the robot holding) when
+        the laser sees it blocked."""
+        a = self.agent
+        tol = a.p.position_tolerance if tolerance is None else tolerance
+        blocked = self.stop_when(target, tol)
+        if blocked() or not a.move_to(self.task, target, yaw, what, tolerance=tolerance, stop_when=blocked):
+            a.backend.logwarn(f'[{self.task.name}] {what}: {self.reason}')
+            raise TaskError(f'{what}: {self.reason}')
+
+
+__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'scan_points']
