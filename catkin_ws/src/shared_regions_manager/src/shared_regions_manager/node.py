@@ -5,7 +5,8 @@ for `~unknown_lease_s`, 10 s wall), `~supervisors` (['/central_unit']: nodes tha
 boxes), `~max_labels_per_agent` (16), `~max_agents` (32), `~state_file` ('' = off: the table is written
 there atomically after every change and reloaded by a respawned manager), `~clock_wait` (10 s wall: how
 long a start waits for /clock to judge the file's age), `~publish_markers` (false: the reserved boxes as a
-MarkerArray on `regions` at 1 Hz, for rviz).
+MarkerArray on `regions` at 1 Hz and at every change, for rviz and the fault suite: the DELETEALL marker's
+text is `table <n>`, the number of the table shown, saved under that number; table_sync.py).
 Deadlocks (core.py, deadlock.py): `~priority` (default `~robot_ids`: highest first; the lowest of a
 wait-for cycle steps aside), `~deadlock_after` (2 s ROS time a cycle stands before the order),
 `~yield_retry` (20 s ROS time before an order is repeated), `~yield_service` ('/mbzirc2020_{}/yield_region':
@@ -13,7 +14,6 @@ the victim's AskForRegion service, called with the winner's agent id, label and 
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 import threading
@@ -27,6 +27,9 @@ from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .core import RegionManager
 from .deadlock import YieldOrder
+from .table_sync import TableSync
+
+TABLE_TEXT = 'table {}'              # the DELETEALL marker's text on /regions: which saved table is shown
 
 FORMAT = 'shared_regions_manager/regions'
 VERSION = 1
@@ -54,22 +57,23 @@ class RegionManagerNode:
         self.yield_service = str(rospy.get_param('~yield_service', '/mbzirc2020_{}/yield_region'))
         self.state_file = str(rospy.get_param('~state_file', '') or '')
         self.mission = str(rospy.get_param('/run_id', '') or '') if self.state_file else ''
-        self._save_lock = threading.Lock()
-        self._saved_body = ''
         self._waiting: dict = {}          # (agent, label) -> why its last request was refused
-        if self.state_file:
-            self._resume()
-        self.ask_srv = rospy.Service('ask_for_region', AskForRegion, self.on_ask)
-        self.free_srv = rospy.Service('free_regions', FreeRegions, self.on_free)
+        table = self._resume() if self.state_file else 0
         self.markers = None
         if rospy.get_param('~publish_markers', False):
             from visualization_msgs.msg import MarkerArray
             self.markers = rospy.Publisher('regions', MarkerArray, queue_size=1)
+        # every change and every publication goes through it: what /regions shows is what is on disk
+        self.table = TableSync(self.core, self.save, self.publish_markers if self.markers is not None else None,
+                               rospy.loginfo, table)
+        self.ask_srv = rospy.Service('ask_for_region', AskForRegion, self.on_ask)
+        self.free_srv = rospy.Service('free_regions', FreeRegions, self.on_free)
         self.timer = PeriodicTimer(1.0, self.on_timer, 'region manager')
 
     # ---- persistence ------------------------------------------------------------------------------
-    def _resume(self) -> None:
-        """Load the reservations of `~state_file` when it is of this mission; else start empty."""
+    def _resume(self) -> int:
+        """Load the reservations of `~state_file` when it is of this mission; else start empty. Returns the
+        number of the table resumed (0: none)."""
         now = rospy.get_time()
         if os.path.exists(self.state_file):
             deadline = time.monotonic() + float(rospy.get_param('~clock_wait', 10.0))
@@ -79,31 +83,28 @@ class RegionManagerNode:
         res = state_file.load(self.state_file, FORMAT, VERSION, self.mission, now, what='regions')
         if res.kind == state_file.OK:
             try:
+                table = int(res.state.get('table', 0))
                 n = self.core.load_state(res.state)
-                rospy.loginfo(f'region manager: resumed {n} reservations from {self.state_file} ({res.reason}): '
-                              + ', '.join(f'{a}/{l}' for a, l in sorted(self.core.regions())))
-                return
-            except ValueError as e:
+                rospy.loginfo(f'region manager: resumed {n} reservations from {self.state_file} ({res.reason}, '
+                              f'table {table}): ' + ', '.join(f'{a}/{l}' for a, l in sorted(self.core.regions())))
+                return table
+            except (ValueError, TypeError) as e:
                 rospy.logerr(f'region manager: cannot resume from {self.state_file}: {e}; starting empty')
-                return
+                return 0
         log = rospy.loginfo if res.kind == state_file.MISSING else rospy.logwarn
         log(f'region manager: {res.reason}; starting with no reservations')
+        return 0
 
-    def save(self) -> None:
-        """Write the table when it changed (at once: a grant must survive a crash right after it)."""
+    def save(self, state: dict, table: int) -> None:
+        """Write table number `table` (at once, before it is shown or the request answered: a grant must
+        survive a crash right after it). Called by self.table under its lock."""
         if not self.state_file:
             return
-        with self._save_lock:
-            state = self.core.to_state()
-            body = json.dumps(state, sort_keys=True)
-            if body == self._saved_body:
-                return
-            try:
-                state_file.save(self.state_file, state_file.encode(state, FORMAT, VERSION, self.mission,
-                                                                   rospy.get_time()))
-                self._saved_body = body
-            except OSError as e:
-                rospy.logerr_throttle(10.0, f'region manager: cannot save to {self.state_file}: {e}')
+        try:
+            state_file.save(self.state_file, state_file.encode(dict(state, table=table), FORMAT, VERSION,
+                                                               self.mission, rospy.get_time()))
+        except OSError as e:
+            rospy.logerr_throttle(10.0, f'region manager: cannot save to {self.state_file}: {e}')
 
     # ---- services ---------------------------------------------------------------------------------
     def on_ask(self, req: AskForRegion._request_class) -> AskForRegionResponse:
@@ -114,7 +115,7 @@ class RegionManagerNode:
             if frame not in ('', 'arena'):
                 rospy.logerr_throttle(5.0, f'ask_for_region from {req.agent_id}: frame {frame!r} is not arena')
                 return AskForRegionResponse(success=False)
-        ok, why = self.core.ask(req.agent_id, req.label, lo, hi, caller=caller_of(req))
+        ok, why = self.table.change(lambda: self.core.ask(req.agent_id, req.label, lo, hi, caller=caller_of(req)))
         if not ok and (not all(map(math.isfinite, lo + hi)) or 'max' in why or not req.agent_id):
             rospy.logerr_throttle(5.0, f'ask_for_region from {req.agent_id!r} ({caller_of(req)}): {why}')
         elif ok and not self.core.is_known(req.agent_id):
@@ -122,8 +123,6 @@ class RegionManagerNode:
                                          f'this mission: {why}')
         rospy.logdebug(f'ask_for_region {req.agent_id}/{req.label}: {why}')
         self._log_wait(req.agent_id, req.label, ok, why)
-        if ok:
-            self.changed()
         return AskForRegionResponse(success=ok)
 
     def _log_wait(self, agent_id: str, label: str, granted: bool, why: str) -> None:
@@ -141,32 +140,22 @@ class RegionManagerNode:
 
     def on_free(self, req: FreeRegions._request_class) -> FreeRegionsResponse:
         """Free one box of the agent, or all of them, when the caller may."""
-        ok, why = self.core.free(req.agent_id, req.label, req.free_all, caller=caller_of(req))
+        ok, why = self.table.change(lambda: self.core.free(req.agent_id, req.label, req.free_all,
+                                                           caller=caller_of(req)))
         if not ok and 'may not' in why:
             rospy.logerr_throttle(5.0, f'free_regions refused: {why}')
-        if ok:
-            self.changed()
         return FreeRegionsResponse(success=ok)
-
-    def changed(self) -> None:
-        """The table changed: save it, and show it at once (the markers are then the table as it is, not as
-        it was up to a second ago: the fault suite compares the last ones before a kill with what resumed)."""
-        self.save()
-        if self.markers is not None:
-            self.publish_markers()
 
     def on_timer(self, _event=None) -> None:
         """Expire the leases of unknown agents; break a deadlock; publish the markers."""
-        gone = self.core.expire()
+        gone = self.table.change(self.core.expire)
         if gone:
             rospy.logwarn(f'region manager: leases expired: {", ".join(f"{a}/{l}" for a, l in gone)}')
-            self.save()
         order = self.core.deadlock()
         if order is not None:
             rospy.logwarn(f'region manager: {order.describe()}')
             threading.Thread(target=self.send_yield, args=(order,), daemon=True, name='yield order').start()
-        if self.markers is not None:
-            self.publish_markers()
+        self.table.republish()
 
     def send_yield(self, order: YieldOrder) -> None:
         """Ask the victim to leave the winner's box (its yield_region service: an AskForRegion whose agent
@@ -187,13 +176,14 @@ class RegionManagerNode:
             f'region manager: {order.victim} {why}, out of {order.winner}/{order.winner_label}')
         self.core.yield_answer(order, accepted)
 
-    def publish_markers(self, _event=None) -> None:
-        """The reserved boxes as translucent cubes (namespace = agent id)."""
+    def publish_markers(self, regions: dict, table: int) -> None:
+        """The reserved boxes of table number `table` as translucent cubes (namespace = agent/label),
+        after a DELETEALL marker whose text names the table. Called by self.table under its lock."""
         from visualization_msgs.msg import Marker, MarkerArray
         arr = MarkerArray()
-        clear = Marker(action=Marker.DELETEALL)
+        clear = Marker(action=Marker.DELETEALL, text=TABLE_TEXT.format(table))
         arr.markers.append(clear)
-        for i, ((agent, label), (lo, hi)) in enumerate(sorted(self.core.regions().items())):
+        for i, ((agent, label), (lo, hi)) in enumerate(sorted(regions.items())):
             m = Marker(type=Marker.CUBE, action=Marker.ADD, id=i, ns=f'{agent}/{label}')
             m.header.frame_id = 'arena'
             m.header.stamp = rospy.Time.now()
