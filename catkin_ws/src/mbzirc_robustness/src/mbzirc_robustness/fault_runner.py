@@ -95,7 +95,8 @@ class Monitor:
         self.last_objects: dict[int, int] = {}     # id -> status of the last /estimated_objects
         self.objects_log: deque[tuple[float, dict[int, int]]] = deque(maxlen=600)  # (wall, id -> status)
         self.objects_walls: deque[float] = deque(maxlen=5000)
-        self.regions_log: deque[tuple[float, frozenset]] = deque(maxlen=120)     # (wall, {agent/label})
+        # (wall, {agent/label}, table number shown or None)
+        self.regions_log: deque[tuple[float, frozenset, Optional[int]]] = deque(maxlen=120)
         self.feeds: dict[str, deque] = {}          # robot -> (wall, active_sub_state) of its data_feeds
         self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=100)         # clock faults only
         self.subs = [rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=10),
@@ -152,21 +153,23 @@ class Monitor:
 
     def _on_regions(self, msg) -> None:
         names = frozenset(m.ns for m in msg.markers if m.ns and m.action == m.ADD)
+        table = next((F.shown_table(m.text) for m in msg.markers if m.action == m.DELETEALL), None)
         with self.lock:
-            self.regions_log.append((self._seen("/regions"), names))
+            self.regions_log.append((self._seen("/regions"), names, table))
 
     def first_objects_after(self, wall: float) -> Optional[dict[int, int]]:
         """The first /estimated_objects received after monotonic time ``wall`` (None if none yet)."""
         with self.lock:
             return next((o for t, o in self.objects_log if t > wall), None)
 
-    def regions_before(self, wall: float) -> Optional[frozenset]:
+    def regions_before(self, wall: float) -> Optional[tuple[frozenset, Optional[int]]]:
+        """(reservations, table number) of the last /regions received before ``wall``."""
         with self.lock:
-            return next((r for t, r in reversed(self.regions_log) if t <= wall), None)
+            return next(((r, n) for t, r, n in reversed(self.regions_log) if t <= wall), None)
 
-    def regions_after(self, wall: float) -> Optional[frozenset]:
+    def regions_after(self, wall: float) -> Optional[tuple[frozenset, Optional[int]]]:
         with self.lock:
-            return next((r for t, r in self.regions_log if t > wall), None)
+            return next(((r, n) for t, r, n in self.regions_log if t > wall), None)
 
     def objects_gaps(self, start: float, end: float) -> list[float]:
         """Pauses (wall s) between /estimated_objects messages within [start, end], edges included."""
@@ -360,14 +363,19 @@ class FaultSuite:
             v = F.compare_tracks(objects_before, after)
             return v["same"] and (mon.last_tracks or 0) >= tracks_before, v
         if f.check == F.CHECK_REGIONS:
-            after = self._resumed_regions(t_kill)            # what the new process says it resumed
+            lines = self._region_manager_log()
+            since = datetime.now() - timedelta(seconds=time.monotonic() - t_kill)
+            after = F.resumed_table(lines, since)            # what the new process says it resumed
             if after is None:
                 after = mon.regions_after(t_new)             # else its first /regions
             if after is None:
                 return False, None
             if regions_before is None:
                 return True, {"detail": "no /regions seen before the kill: kept reservations not checked"}
-            v = F.compare_regions(regions_before, after)
+            (before, before_table), (resumed, resumed_table) = regions_before, after
+            removed = (F.removed_between(lines, before_table, resumed_table)
+                       if before_table is not None and resumed_table is not None else set())
+            v = F.compare_regions(before, resumed, before_table, resumed_table, removed)
             return v["same"], v
         if f.check in (F.CHECK_INPUTS, F.CHECK_DETECTIONS):
             info = self._bus_info(f.target)
@@ -381,16 +389,16 @@ class FaultSuite:
             return v["ok"], v
         return True, None
 
-    def _resumed_regions(self, t_kill: float) -> Optional[set[str]]:
-        """The reservations the respawned region manager logged as resumed (its gs ROS log), if it did."""
-        since = datetime.now() - timedelta(seconds=time.monotonic() - t_kill)
+    def _region_manager_log(self) -> list[str]:
+        """The region manager's ROS log lines on the ground station, the killed process's and the respawned
+        one's (what it resumed, the boxes it removed before the kill)."""
         lines: list[str] = []
         for path in glob.glob(os.path.join(self.out, "logs", C.GROUND_STATION, "*", "region_manager*.log")):
             if "latest" in path or path.endswith("-stdout.log"):
                 continue
             with open(path, encoding="utf-8", errors="replace") as fh:
                 lines += fh.readlines()
-        return F.resumed_regions(lines, since)
+        return lines
 
     def _watch_decisions(self, f: F.Fault, mon: Monitor) -> dict[str, Any]:
         """Wait (at most DECISION_WITHIN_S sim s after its first status, 3 x that in wall time) for the

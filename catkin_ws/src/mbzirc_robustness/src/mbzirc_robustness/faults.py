@@ -238,12 +238,28 @@ def judge_working(feeds_after: list[tuple[float, str]], history: list[tuple[floa
 
 
 RESUMED_LINE = re.compile(r"region manager: resumed (\d+) reservations from .*?\): ?(.*)$")
+RESUMED_TABLE = re.compile(r"table (\d+)\): ")                    # the number of the table resumed
+REMOVED_LINE = re.compile(r"region manager: table (\d+): removed (.*)$")
+SHOWN_TABLE = re.compile(r"^table (\d+)$")                       # /regions' DELETEALL marker text
+
+
+def shown_table(text: str) -> Optional[int]:
+    """The table number a /regions message shows (its DELETEALL marker's text), None when it has none."""
+    m = SHOWN_TABLE.match(text or "")
+    return int(m.group(1)) if m else None
 
 
 def resumed_regions(lines: Iterable[str], since: datetime) -> Optional[set[str]]:
     """The reservations (``agent/label``) a respawned region manager says it resumed, from its ROS log
     lines after ``since`` (None: no such line). Why not its first /regions: its owners may rightly free
     or replace them in the second before that (a respawned agent settling its regions)."""
+    found = resumed_table(lines, since)
+    return None if found is None else found[0]
+
+
+def resumed_table(lines: Iterable[str], since: datetime) -> Optional[tuple[set[str], Optional[int]]]:
+    """(reservations, table number or None for a manager that does not number them) of the last
+    "resumed" line after ``since``; None: no such line."""
     found = None
     for line in lines:
         m = ROSOUT_LINE.match(line.rstrip("\n"))
@@ -252,16 +268,40 @@ def resumed_regions(lines: Iterable[str], since: datetime) -> Optional[set[str]]
         t = datetime.strptime(m.group(2), "%Y-%m-%d %H:%M:%S").replace(microsecond=int(m.group(3)) * 1000)
         r = RESUMED_LINE.search(m.group(4))
         if r and t >= since:
-            found = {x.strip() for x in r.group(2).split(",") if x.strip()}
+            n = RESUMED_TABLE.search(m.group(4))
+            found = ({x.strip() for x in r.group(2).split(",") if x.strip()}, int(n.group(1)) if n else None)
     return found
 
 
-def compare_regions(before: Iterable[str], after: Iterable[str]) -> dict[str, Any]:
+def removed_between(lines: Iterable[str], after_table: int, up_to_table: int) -> set[str]:
+    """The reservations the region manager logged as removed (freed by their owner or a supervisor, lease
+    expired) by tables ``after_table + 1 .. up_to_table`` (it logs them before saving the table)."""
+    out: set[str] = set()
+    for line in lines:
+        m = ROSOUT_LINE.match(line.rstrip("\n"))
+        r = REMOVED_LINE.search(m.group(4)) if m else None
+        if r and after_table < int(r.group(1)) <= up_to_table:
+            out |= {x.strip() for x in r.group(2).split(",") if x.strip()}
+    return out
+
+
+def compare_regions(before: Iterable[str], after: Iterable[str], before_table: Optional[int] = None,
+                    after_table: Optional[int] = None, removed: Iterable[str] = ()) -> dict[str, Any]:
     """Verdict on a region manager restart: the reservations (``agent/label``) of its last /regions before
-    the kill are all in its first /regions after the respawn (nobody could free them meanwhile)."""
-    missing = sorted(set(before) - set(after))
-    return {"same": not missing, "before": sorted(before), "missing": missing,
-            "detail": f"reservations lost: {missing}" if missing else "every reservation kept"}
+    the kill are all in the table it resumed, except the ones its log says were removed by the tables
+    saved after the one shown (``removed``: an owner freed its box between the last /regions the suite
+    got and the kill). With table numbers (``before_table`` shown, ``after_table`` resumed), resuming a
+    table older than one already shown is a loss by itself: every table shown was on disk before."""
+    removed = set(removed) if before_table is not None and after_table is not None else set()
+    missing = sorted(set(before) - set(after) - removed)
+    older = before_table is not None and after_table is not None and after_table < before_table
+    problems = ([f"resumed table {after_table}, older than table {before_table} shown before the kill"] if older else [])
+    problems += [f"reservations lost: {missing}"] if missing else []
+    freed = sorted((set(before) - set(after)) & removed)
+    return {"same": not problems, "before": sorted(before), "missing": missing, "freed_meanwhile": freed,
+            "before_table": before_table, "after_table": after_table,
+            "detail": "; ".join(problems) or ("every reservation kept" + (
+                f" (freed by their owners after the last /regions: {freed})" if freed else ""))}
 
 
 def _agent(status: dict[str, Any], robot: str) -> dict[str, Any]:

@@ -336,6 +336,34 @@ def test_resumed_regions_are_read_from_the_managers_log():
     assert F.resumed_regions(lines, datetime(2026, 11, 24, 2, 18, 0)) is None
 
 
+def test_a_box_freed_between_the_last_regions_and_the_kill_is_not_lost_but_an_unlogged_one_is():
+    """The run that failed with "reservations lost: ['2/go_to']": the last /regions before the kill showed
+    table 41 with 2/go_to; UAV 2 freed it (table 42, logged, saved) just before the kill; the respawned
+    manager resumed table 42. Only boxes the old manager logged as removed after the table shown are
+    excused: a box of the shown table missing without such a line, or a resumed table older than the one
+    shown, is still a loss."""
+    from datetime import datetime
+    old = ["[rosout][INFO] 2026-11-24 02:16:40,100: region manager: table 40: removed 1/go_to\n",
+           "[rosout][INFO] 2026-11-24 02:16:48,902: region manager: table 42: removed 2/go_to\n"]
+    new = ["[rosout][INFO] 2026-11-24 02:16:53,215: region manager: resumed 4 reservations from /o/regions.json "
+           "(regions saved at t=161.4 s, table 42): 1/parked, 2/hold, 3/go_to, 3/hold\n"]
+    before = {"1/parked", "2/hold", "2/go_to", "3/go_to", "3/hold"}
+    resumed, table = F.resumed_table(old + new, datetime(2026, 11, 24, 2, 16, 49))
+    assert table == 42 and resumed == before - {"2/go_to"}
+    assert not F.compare_regions(before, resumed)["same"], "without table numbers: judged as before"
+    removed = F.removed_between(old + new, 41, table)
+    assert removed == {"2/go_to"}
+    v = F.compare_regions(before, resumed, 41, table, removed)
+    assert v["same"] and v["freed_meanwhile"] == ["2/go_to"], v
+    lost = resumed - {"3/hold"}                                   # a live box truly lost
+    v = F.compare_regions(before, lost, 41, table, removed)
+    assert not v["same"] and v["missing"] == ["3/hold"], v
+    assert not F.compare_regions(before, resumed, 41, table, F.removed_between(old, 39, 40))["same"]
+    v = F.compare_regions(before, before, 41, 40, set())         # resumed a table older than one shown
+    assert not v["same"] and "older" in v["detail"], v
+    assert F.shown_table("table 41") == 41 and F.shown_table("") is None
+
+
 def test_a_lazy_node_without_demand_may_leave_its_inputs_unconnected():
     """A respawned circle detector (~lazy) subscribes to its cameras only while a task demands holes: with no
     subscriber on its outputs, unconnected inputs are its design; with one, they are a failure."""
