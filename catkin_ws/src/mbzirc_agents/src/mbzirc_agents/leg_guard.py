@@ -9,8 +9,8 @@ robot's own laser measures the walls as they are, whatever its GNSS error says.
 
 Rules:
 - the corridor of a leg is the strip ahead of the robot along the leg's horizontal direction (from where the
-  robot is now to the leg's end, less its arrival tolerance: there it is done), `half_width` either side
-  (the robot's half width plus a margin), its end rounded (a disc of that radius);
+  robot is now to the leg's end: the UAL goes on to the set-point after the leg counts as arrived),
+  `half_width` either side (the robot's half width plus a margin), its end rounded (a disc of that radius);
 - a scan's returns are placed in the arena frame with the pose the robot had when the scan arrived, then
   seen from the pose of now (the robot moved since: at 1 m/s a scan 0.3 s old is 0.3 m nearer);
 - the leg is blocked when at least MIN_BEAMS returns lie in the corridor no farther than `stop_distance`
@@ -68,8 +68,8 @@ def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequenc
                       stop_distance: float, min_leg: float) -> Optional[float]:
     """The distance ahead of the nearest return blocking the leg from here to target (x, y), None when it
     is clear or has no more than min_leg (its arrival tolerance) to go. A return blocks when it is at most
-    stop_distance ahead and within half_width of the way still to go, which ends min_leg short of target
-    (there the leg is done): a leg ending short of a wall is not blocked by it."""
+    stop_distance ahead and within half_width of the way still to go, to target itself (the UAL goes on to
+    the set-point after the leg counts as arrived): a leg ending short of a wall is not blocked by it."""
     d = np.asarray(target[:2], dtype=float) - np.asarray(here[:2], dtype=float)
     length = float(np.hypot(d[0], d[1]))
     if length <= min_leg:
@@ -79,8 +79,7 @@ def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequenc
     if ahead.size:
         rel = np.asarray(points, dtype=float) - np.asarray(here[:2], dtype=float)
         along, aside = rel @ u, rel @ np.array([-u[1], u[0]])
-        end = length - min_leg
-        beyond = np.hypot(np.maximum(along - end, 0.0), aside)       # off the way to go (its end a disc)
+        beyond = np.hypot(np.maximum(along - length, 0.0), aside)    # off the way to go (its end a disc)
         ahead = along[(along > 0.0) & (along <= stop_distance) & (beyond <= half_width)]
     return float(ahead.min()) if ahead.size >= MIN_BEAMS else None
 
