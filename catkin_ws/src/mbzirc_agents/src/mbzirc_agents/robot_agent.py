@@ -598,11 +598,11 @@ class RobotAgent(Agent):
             self.backend.logwarn(f'stepping aside from {np.round(here[:3], 2)} to {np.round(target, 2)}: out of '
                                  f'{winner}/{label} {box_text(box)} (a deadlock)')
             task.feedback('STEPPING_ASIDE', f'out of the way of {winner}/{label}')
-            try:
-                self.move_to(task, target, None, 'stepping aside')
-                self.reserve(task, 'hold', self.hold_box(self.position()), timeout=10.0)
-            finally:
-                self.free(STEP_LABEL)
+            # the step box is freed only once the hold is ours where the UAV stopped: a step cut short
+            # (preempted, timed out) leaves the UAV inside boxes it holds
+            self.move_to(task, target, None, 'stepping aside')
+            self.reserve(task, 'hold', self.hold_box(self.position()), timeout=10.0)
+            self.free(STEP_LABEL)
             return True
         self.backend.logwarn(f'cannot step out of {winner}/{label} {box_text(box)}: no step granted')
         return False

@@ -84,6 +84,32 @@ def test_two_uavs_each_waiting_for_the_others_hold_box_no_longer_wait_forever(tw
     assert ual.pos == pytest.approx([0.0, 8.0, 6.0], abs=0.35)
 
 
+def test_every_step_taken_by_others_the_uav_stays_and_waits_on(two_uavs):
+    """Robot 1 holds the boxes of all four steps: UAV 2 accepted, finds no step granted, does not move and
+    holds no step box; its go-to still waits (the manager asks again after ~yield_retry)."""
+    agent, ual, be, rm = two_uavs
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=6.0))
+    assert s.wait(20) == 'succeeded'
+    assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
+    for i, box in enumerate((((-1, -1, 3.0), (1, 1, 4.5)), ((-3.3, -1, 5), (-1.5, 1, 7)),
+                             ((1.5, -1, 5), (3.3, 1, 7)), ((-1, -1, 8.5), (1, 1, 10)))):
+        assert rm.ask('1', f'x{i}', *box)[0]
+    go = be.servers['go_to_action']
+    go.send(GoToGoal(waypoint=pose(0.0, 8.0, 6.0)))
+    orders = []
+    for _ in range(20):
+        assert not rm.ask('3', 'go_to', *UAV3_GO_TO)[0]
+        got = manager_step(be, rm)
+        if got:
+            orders.append(got)
+        be.clock.sleep(0.5)
+    assert [(o.victim, ok) for o, ok in orders] == [('2', True)]
+    assert ual.pos == pytest.approx([0.0, 0.0, 6.0], abs=0.2)
+    assert ('2', 'step_aside') not in rm.regions() and not go.done.is_set()
+    assert any('cannot step out of 3/go_to' in w for w in be.warns)
+
+
 def test_a_uav_not_waiting_for_a_region_declines_to_step_aside(two_uavs):
     agent, ual, be, rm = two_uavs
     s = be.servers['take_off_action']
