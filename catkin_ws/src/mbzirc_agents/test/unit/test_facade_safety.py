@@ -292,8 +292,10 @@ def test_cold_answers_without_water_flowing_do_not_count(scene):
 
 def test_a_gusty_offset_around_the_hole_is_centred_on_average(scene):
     """Gusts keep the UAV wandering 0.3 m around the hole (a circle every 2 s, that its controller cannot
-    follow): never within the tolerance on both axes at once, but on the hole on average. It must shoot,
-    not give up with 'could not centre'."""
+    follow): never within the tolerance on both axes at once, but on the hole on average. It must shoot
+    (was: the pump stopped 1 s after the first instant and the task ran out of time). Its cold answers do
+    not count (the jet is never on the hole within the tolerance when they come): the fire, seen hot,
+    is left for a top-up, not judged out."""
     agent, ual, be, sc = scene
     agent.p.centering_timeout = 12.0
     ual.follow_velocity = True
@@ -304,8 +306,25 @@ def test_a_gusty_offset_around_the_hole_is_centred_on_average(scene):
     sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
     sc.hot = lambda: ual.water > 1.7
     s, status = extinguish(be, timeout=40)
+    assert status == 'succeeded' and not s.result.extinguished, (status, s.result.message)
+    assert ual.water <= 0.1 and 'top-up' in s.result.message, (ual.water, s.result.message)
+    assert sc.statuses == []
+
+
+def test_a_gust_along_the_wall_is_shot_and_cold_counts_when_the_jet_is_on_the_hole(scene):
+    """The usual gust: along the wall, 0.3 m either side of the hole every 2 s (the jet crosses the hole):
+    it shoots all along and the cold answers taken with the jet on the hole put the fire out."""
+    agent, ual, be, sc = scene
+    ual.follow_velocity = True
+    ual.speedup = 1.0
+    w = 2 * math.pi / 2.0
+    gusty = lambda: bool(be.pubs.get('ual/set_velocity'))
+    sc.wander = lambda t: np.array([0.0, 0.3 * math.sin(w * t), 0.0]) * gusty()
+    sc.circles = [(HOLDER, 0.3), (DECOY_L, 0.0), (DECOY_R, 0.0)]
+    sc.hot = lambda: ual.water > 1.7
+    s, status = extinguish(be, timeout=40)
     assert status == 'succeeded' and s.result.extinguished, (status, s.result.message)
-    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+    assert ual.water > 0.3 and sc.statuses == [C.STATUS_EXTINGUISHED]
 
 
 def test_an_estimate_far_off_the_hole_is_searched_around(scene):

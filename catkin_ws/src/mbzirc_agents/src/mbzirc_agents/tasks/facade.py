@@ -400,8 +400,8 @@ class ExtinguishFacadeFire(AgentTask):
         off WIDE_VIEW_EXTRA and looks around it and its nearest known holder (look_point).
 
         Out (tasks/cold_check.py): seen hot while centred on the locked hole (the watering pose), then
-        C.COLD_CHECKS "no fire" answers in a row, each centred there with water flowing (the tank level
-        dropping). A new lock starts again. A lock never seen hot gets ~top_up_time of water (a nearly quenched
+        C.COLD_CHECKS "no fire" answers in a row, each with the jet on the hole at that instant (within the
+        tolerance, not only on average) and water flowing (the tank level dropping). A new lock starts again. A lock never seen hot gets ~top_up_time of water (a nearly quenched
         heater reads cold) and the goal then fails: cold there may mean the camera looks through the hole or
         at a decoy as much as "out" (was: out after 2 x C.COLD_CHECKS cold answers).
         """
@@ -481,7 +481,10 @@ class ExtinguishFacadeFire(AgentTask):
                 # hole switch, fire 10 % full), and cold answers while the wind holds the jet beside the
                 # hole leave a nearly quenched fire unfinished (seen: 99.5 %)
                 last_check = now
-                if cold.update(a.fire_detected(), flow is not None and flow.flowing(now)):
+                hot = a.fire_detected()
+                # a hot answer counts from anywhere around the hole; a cold one only with the jet on it now
+                # (centred on average, a gust may hold it beside the hole: no water into the fire then)
+                if (hot or ctl.centred(target)) and cold.update(hot, flow is not None and flow.flowing(now)):
                     return True                         # cold: stop pumping, keep the rest of the tank
             if watering and not cold.seen_hot:
                 unseen_water += step
