@@ -175,3 +175,10 @@ def test_the_straight_window_entry_of_old_stops_before_the_frame(uav):
     assert status == 'aborted', s.result.message
     assert 'blocks the leg' in s.result.message, s.result.message
     assert ual.pos[1] > WALL_Y[1] + UAV_R, f'in the wall: {ual.pos}'
+
+
+def test_after_a_doorway_the_leg_goes_on_from_the_depth_reached_never_back_towards_the_wall():
+    from mbzirc_agents.tasks.passage import _not_behind
+    assert _not_behind((19.5, 11.0, 0.0), (20.2, 10.6, 0.0, 0.0), 0.0) == pytest.approx((20.2, 11.0, 0.0))
+    assert _not_behind((21.0, 11.0, 0.0), (20.2, 10.6, 0.0, 0.0), 0.0) == (21.0, 11.0, 0.0)
+    assert _not_behind((16.5, 11.0), (16.0, 11.2, 0.0, math.pi), math.pi) == pytest.approx((16.0, 11.0))

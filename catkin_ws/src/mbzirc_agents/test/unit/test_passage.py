@@ -329,12 +329,14 @@ def test_the_ugv_is_clear_of_a_doorway_before_its_leg_goes_on(ugv):
     scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 10.0), (17.7, 12.0, 17.9, 19.3)]
     track = Track(be, ual, (17.7, 17.9), UGV_R, 11.0, axis=0)
     s = be.servers['search_indoor_action']
-    # truly (18.9, 12.0): 0.4 m clear of the frame's corner (17.9, 12.0) for the UGV's 0.6 m radius (at the
-    # seed's (19.6, 11.0), truly 0.1 m clear, the leg guard holds it: leg_guard.py, a 0.9 m corridor)
-    s.send(SearchIndoorGoal(floor=0, path=[pose(19.9, 11.0, 0.0, 0.0)]))
+    # truly (18.6, 12.0), 0.1 m clear of the frame's corner for the UGV's radius: behind where the passage
+    # ends (clear of the wall by the laser), so the leg goes on square to the wall from there, not back
+    # towards it (where the leg guard would hold it: leg_guard.py, a 0.9 m corridor)
+    s.send(SearchIndoorGoal(floor=0, path=[pose(19.6, 11.0, 0.0, 0.0)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.0 + UGV_R, 12.0 - UGV_R), (min(track.xs), max(track.xs))
+    assert ual.pos[0] > 17.9 + 1.0, f'back towards the wall: {ual.pos}'
 
 
 def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):

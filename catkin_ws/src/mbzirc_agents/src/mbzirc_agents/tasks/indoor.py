@@ -96,8 +96,8 @@ class SearchIndoor(AgentTask):
                 if crosses_outline(a.position(), wp):
                     self.passage.to(wp)
                 else:
-                    self.passage.doorway(wp)             # through a doorway on the way, if there is one
-                    self.call_task_or_raise('move', {'waypoint': (wp, yaw)})
+                    on_to = self.passage.doorway(wp)     # through a doorway on the way, if there is one
+                    self.call_task_or_raise('move', {'waypoint': (on_to, yaw)})
             except TaskError as e:
                 raise TaskError(f'waypoint {i + 1}: {e}')
             found = self._look(ud.floor, i, len(path), yaw)
