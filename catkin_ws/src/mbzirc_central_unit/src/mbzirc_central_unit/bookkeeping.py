@@ -10,6 +10,7 @@ from typing import Any, Optional
 
 from . import constants as C
 from .command import Command, StrategyParams
+from .failure_rules import LEG_BLOCKED, NOT_SEEN_HOT, LegBackoff, UnconfirmedFires, failure_kind
 from .world_model import AgentView, WorldView
 
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
@@ -31,14 +32,20 @@ class Bookkeeping:
         self.seen_flying: set[str] = set()
         self.seen_ready: set[str] = set()   # agents whose UAL reported a state (not UNINITIALIZED) once
         self.crashed: set[str] = set()  # robots seen moving, now UNINITIALIZED: the simulator's crash state
+        self.leg_backoff = LegBackoff(params.leg_blocked_backoff, params.leg_blocked_backoff_max,
+                                      params.max_blocked_legs)
+        self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
+        self.notes: list[str] = []  # log lines of the failure rules, taken by the node (take_notes)
 
     def on_sent(self, cmd: Command) -> None:
         """The node sent `cmd`: the agent is busy with it until `record`."""
         self.in_flight[cmd.agent_id] = cmd
 
-    def record(self, cmd: Command, succeeded: bool, result: Optional[dict[str, Any]] = None) -> bool:
+    def record(self, cmd: Command, succeeded: bool, result: Optional[dict[str, Any]] = None,
+               now: float = 0.0) -> bool:
         """Count the outcome of a command (searches done, failures); True when the agent has now failed it
-        `max_failures` times on this target: that work is given up for this agent."""
+        `max_failures` times on this target, or its leg was blocked `max_blocked_legs` times
+        (failure_rules.py): that work is given up for this agent. `now`: sim time of the result."""
         result = result or {}
         self.in_flight.pop(cmd.agent_id, None)
         if succeeded:
@@ -52,10 +59,29 @@ class Bookkeeping:
         key = (cmd.agent_id, cmd.task, cmd.target)
         self.failures[key] += 1
         self.consecutive_failures[cmd.agent_id] += 1
+        kind = failure_kind(cmd.task, str(result.get("message", "")))
+        if kind == LEG_BLOCKED:
+            gave_up, note = self.leg_backoff.note(key, now)
+            self.notes.append(note)
+            if gave_up:
+                self.failures[key] = max(self.failures[key], self.p.max_failures)
+        elif kind == NOT_SEEN_HOT:
+            note = self.unconfirmed.note(cmd.target, cmd.agent_id)
+            if note:
+                self.notes.append(note)
         if self.failures[key] < self.p.max_failures:
             return False
         self._count_search(cmd)  # a search given up counts as one, so that the mission moves on
         return True
+
+    def take_notes(self) -> list[str]:
+        """The failure rules' log lines since the last call."""
+        notes, self.notes = self.notes, []
+        return notes
+
+    def backing_off(self, cmd: Command, now: float) -> bool:
+        """True while `cmd` (same agent, task and target) waits out a blocked-leg back-off."""
+        return self.leg_backoff.waiting((cmd.agent_id, cmd.task, cmd.target), now)
 
     def _count_search(self, cmd: Command) -> None:
         if cmd.task == C.SEARCH_FACADE:

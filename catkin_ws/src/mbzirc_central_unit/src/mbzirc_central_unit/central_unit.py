@@ -104,6 +104,10 @@ class CentralUnit:
             facade_searches=int(rospy.get_param("~searches", 2)),
             second_search_first=bool(rospy.get_param("~second_search_first", True)),
             max_failures=int(rospy.get_param("~max_failures", C.MAX_TASK_FAILURES)),
+            leg_blocked_backoff=float(rospy.get_param("~leg_blocked_backoff", C.LEG_BLOCKED_BACKOFF)),
+            leg_blocked_backoff_max=float(rospy.get_param("~leg_blocked_backoff_max", C.LEG_BLOCKED_BACKOFF_MAX)),
+            max_blocked_legs=int(rospy.get_param("~max_blocked_legs", C.MAX_BLOCKED_LEGS)),
+            not_seen_hot_limit=int(rospy.get_param("~not_seen_hot_limit", C.NOT_SEEN_HOT_LIMIT)),
             uavs_take_ground_floor_indoors=bool(rospy.get_param("~uavs_take_ground_floor_indoors", False)),
         )
         self.strategy = Strategy(params)
@@ -270,7 +274,7 @@ class CentralUnit:
             if not_tried:
                 self.strategy.forget(cmd)
             else:
-                self.strategy.on_result(cmd, ok, res)
+                self.strategy.on_result(cmd, ok, res, now)
             level = rospy.loginfo if ok else rospy.logwarn
             level(f"central_unit: {cmd.agent_id} {cmd.task} -> {GoalStatus.to_string(status)} "
                   f"{res.get('message', '')}")
@@ -279,7 +283,9 @@ class CentralUnit:
             rospy.logwarn(f"central_unit: {cmd.agent_id} {cmd.task} gave no result in {waited:.0f} s: "
                           "cancelled, counted as a failure")
             self._client(cmd.agent_id, cmd.task).cancel_goal()
-            self.strategy.on_result(cmd, False, {"message": f"timed out after {waited:.0f} s"})
+            self.strategy.on_result(cmd, False, {"message": f"timed out after {waited:.0f} s"}, now)
+        for note in self.strategy.take_notes():
+            rospy.logwarn(f"central_unit: {note}")   # failure_rules.py: blocked legs, fires probably out
         for agent_id in self.agent_ids:
             a = world.agents.get(agent_id)
             alive = a is not None and a.alive(now, self.strategy.p.agent_timeout)

@@ -36,5 +36,9 @@ class StrategyParams:
     facade_searches: int = 2          # searches of a floor whose fire was not found (the second search)
     second_search_first: bool = True  # the second facade search before the indoor floors
     max_failures: int = C.MAX_TASK_FAILURES
+    leg_blocked_backoff: float = C.LEG_BLOCKED_BACKOFF         # failure_rules.py
+    leg_blocked_backoff_max: float = C.LEG_BLOCKED_BACKOFF_MAX
+    max_blocked_legs: int = C.MAX_BLOCKED_LEGS
+    not_seen_hot_limit: int = C.NOT_SEEN_HOT_LIMIT
     # UAVs search the ground floor indoors when the UGV is gone (the agents accept floors 1-2 only now).
     uavs_take_ground_floor_indoors: bool = False

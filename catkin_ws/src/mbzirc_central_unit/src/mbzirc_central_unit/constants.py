@@ -64,6 +64,13 @@ GROUND_SEARCH_ALTITUDE = 4.0  # downward thermal footprint about 2.4 m wide
 GROUND_SWEEP_SPACING = 2.5
 MISSION_DURATION = _arena.TRIAL_DURATION   # s, 20 minutes
 MAX_TASK_FAILURES = 3           # failures of one task kind on one target before giving it up
+# failure_rules.py: a leg the agent's laser saw blocked is not sent again before a back-off doubling from
+# LEG_BLOCKED_BACKOFF s up to LEG_BLOCKED_BACKOFF_MAX s; MAX_BLOCKED_LEGS blocked failures: target given up
+LEG_BLOCKED_BACKOFF = 10.0
+LEG_BLOCKED_BACKOFF_MAX = 60.0
+MAX_BLOCKED_LEGS = 3
+# 'not seen hot' aborts (after water on its hole, any robots) before a facade fire is probably out
+NOT_SEEN_HOT_LIMIT = 2
 # Transit altitude per UAV id: each UAV flies outside the building at its own altitude.
 DEFAULT_ALTITUDES = {"1": 4.0, "2": 6.0, "3": 8.0}
 ALTITUDE_BASE = 4.0

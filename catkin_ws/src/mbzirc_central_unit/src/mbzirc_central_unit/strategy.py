@@ -53,6 +53,7 @@ class Strategy:
         self.blanket = BlanketDecider(*parts)
         self.indoor = IndoorPhase(*parts)
         self.water = WaterDecider(*parts, indoor=self.indoor)
+        self._now = 0.0  # sim time of the last decision
 
     # ---- what the node (status, recorder) and the tests read ---------------------------------------
     @property
@@ -88,15 +89,21 @@ class Strategy:
         """The node sent `cmd`: the agent is busy with it until `on_result`."""
         self.book.on_sent(cmd)
 
-    def on_result(self, cmd: Command, succeeded: bool, result: Optional[dict[str, Any]] = None) -> None:
-        """Outcome of a command: updates search counts, failures, and releases work given up."""
-        gave_up = self.book.record(cmd, succeeded, result)
+    def on_result(self, cmd: Command, succeeded: bool, result: Optional[dict[str, Any]] = None,
+                  now: Optional[float] = None) -> None:
+        """Outcome of a command at sim time `now` (default: the last decision's): updates search counts,
+        failures, and releases work given up."""
+        gave_up = self.book.record(cmd, succeeded, result, self._now if now is None else now)
         if succeeded:
             return
         if self.book.broken(cmd.agent_id):
             self.owners.release(cmd.agent_id)  # e.g. crashed: whatever it owned goes to the others
         if gave_up:
             self.owners.give_up(cmd)
+
+    def take_notes(self) -> list[str]:
+        """Log lines of the failure rules (failure_rules.py) since the last call, for the node to log."""
+        return self.book.take_notes()
 
     def forget(self, cmd: Command) -> None:
         """A command that could not be sent (no action server yet): not in flight, not a failure."""
@@ -116,6 +123,7 @@ class Strategy:
         """Commands for every alive, idle agent without a goal in flight. Each returned command counts as
         in flight; the caller calls `on_result` when it ends, or `on_result(cmd, False)` / `forget` if it
         could not be sent."""
+        self._now = world.now
         for agent_id in self.book.note_crashes(world):
             self.owners.release(agent_id)
         self.owners.rebuild(world)
@@ -134,6 +142,8 @@ class Strategy:
                 cmd = self.blanket.decide(a, world)
             else:
                 cmd = self.water.decide(a, world)
+            if cmd is not None and self.book.backing_off(cmd, world.now):
+                continue  # the same leg was just seen blocked: wait (failure_rules.py)
             if cmd is not None:
                 self.book.on_sent(cmd)  # in flight at once: later decisions of this tick see it
                 out.append(cmd)

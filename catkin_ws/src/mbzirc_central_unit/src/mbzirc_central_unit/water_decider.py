@@ -48,7 +48,8 @@ class WaterDecider(Decider):
         for f in self.p.floor_priority:
             if world.extinguished_on(C.KIND_FACADE, f):
                 continue
-            if world.fires_of(C.KIND_FACADE, f) or self.book.facade_searches[f] < self.p.facade_searches:
+            if self._confirmed(world.fires_of(C.KIND_FACADE, f)) \
+                    or self.book.facade_searches[f] < self.p.facade_searches:
                 out.append(f)
         return out
 
@@ -56,11 +57,11 @@ class WaterDecider(Decider):
         """(kind, floor, fire or None) of the next job of a water UAV, in strategy order."""
         aid = a.agent_id
         owners = self.owners
-        # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first).
-        mine = [f for f in world.fires_of(C.KIND_FACADE)
-                if owners.floor_owner.get(f.floor) == aid and self._fire_ok(a, f)]
-        free = [f for f in world.fires_of(C.KIND_FACADE)
-                if owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
+        # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first); fires
+        #    probably out (failure_rules.py) only when nothing else is left (4.)
+        facade = self._confirmed(world.fires_of(C.KIND_FACADE))
+        mine = [f for f in facade if owners.floor_owner.get(f.floor) == aid and self._fire_ok(a, f)]
+        free = [f for f in facade if owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
         for group in (mine, free):
             if group:
                 f = nearest(a, group)
@@ -98,7 +99,17 @@ class WaterDecider(Decider):
             if here in candidates and near_building(a):
                 return (kind, here, None)
             return (kind, candidates[0], None)
+        # 4. the end: facade fires probably out but unconfirmed, revisited while time remains
+        late = [f for f in world.fires_of(C.KIND_FACADE) if self.book.unconfirmed.probably_out(f.fire_id)
+                and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
+        if late:
+            f = nearest(a, late)
+            return (C.KIND_FACADE, f.floor, f)
         return None
+
+    def _confirmed(self, fires: list[FireView]) -> list[FireView]:
+        """Fires not marked probably out after repeated 'not seen hot' aborts (failure_rules.py)."""
+        return [f for f in fires if not self.book.unconfirmed.probably_out(f.fire_id)]
 
     def _facade_step(self, a: AgentView, floor: int, fire: Optional[FireView]) -> Command:
         """Next task towards searching a floor or putting out a facade fire: elevator transit first."""

@@ -1,0 +1,119 @@
+"""failure_rules.py: a blocked leg backs off and is given up; a facade fire repeatedly not seen hot after water
+on its hole is probably out. Sim time is the WorldView's (a fake clock): no sleeping."""
+from mbzirc_central_unit import constants as C
+from mbzirc_central_unit import geometry as G
+from mbzirc_central_unit.command import Command
+from mbzirc_central_unit.failure_rules import LEG_BLOCKED, NOT_SEEN_HOT, failure_kind
+from mbzirc_central_unit.strategy import Strategy, StrategyParams
+from mbzirc_central_unit.ugv_decider import DOOR
+from mbzirc_central_unit.world_model import AgentView, FireView, WorldView
+
+# the agents' texts (leg_guard.py; extinguish_facade_fire with cold_check.NOT_SEEN_HOT), as in realistic runs
+BLOCKED = ("a laser return 0.96 m ahead blocks the leg to (19.5, 11.0) (hit within 0.6 m of the way, "
+           "2 returns): holding")
+NOT_HOT = ("fire 7 not seen hot from the watering pose: not judged out: 40 s of water on its hole "
+           "(seen through) without a hot answer there; left active")
+
+
+def _ugv_world(t):
+    ugv = AgentView("0", C.ROBOT_UGV, C.PAYLOAD_WATER, 5.0, 10.0, 0.0, ual_state=C.UAL_LANDED_ARMED,
+                    water_level=2.0, last_seen=t)
+    return WorldView(t, {"0": ugv}, {})
+
+
+def _search(s, t):
+    return [c for c in s.decide(_ugv_world(t)) if c.task == C.SEARCH_INDOOR and c.target == DOOR]
+
+
+def test_failure_kinds_by_the_agents_texts():
+    assert failure_kind(C.SEARCH_INDOOR, BLOCKED) == LEG_BLOCKED
+    assert failure_kind(C.GO_TO, BLOCKED) == LEG_BLOCKED
+    assert failure_kind(C.EXTINGUISH_FACADE_FIRE, NOT_HOT) == NOT_SEEN_HOT
+    # a fire not found, no water, a time-out, or the phrase from another task: not 'not seen hot'
+    for task, text in ((C.EXTINGUISH_FACADE_FIRE, "fire 7 not found"),
+                       (C.EXTINGUISH_FACADE_FIRE, "no water flows: the tank level stayed at 1.00 L for 4 s"),
+                       (C.EXTINGUISH_FACADE_FIRE, "timed out after 420 s"),
+                       (C.EXTINGUISH_INDOOR_FIRE, NOT_HOT)):
+        assert failure_kind(task, text) is None
+
+
+def test_a_blocked_leg_is_not_sent_again_at_once_and_backs_off_longer_each_time():
+    # max_failures high: the bound below is the blocked-leg rule's own
+    s = Strategy(StrategyParams(max_failures=10, leg_blocked_backoff=10.0, leg_blocked_backoff_max=60.0,
+                                max_blocked_legs=3))
+    [c] = _search(s, 0.0)
+    s.on_result(c, False, {"message": BLOCKED}, now=1.0)
+    assert any("leg blocked (1 of 3)" in n for n in s.take_notes())
+    assert _search(s, 1.5) == []           # before: the same search_indoor again at once
+    assert _search(s, 10.9) == []
+    [c] = _search(s, 11.1)                 # 10 s later
+    s.on_result(c, False, {"message": BLOCKED}, now=12.0)
+    assert _search(s, 31.9) == []          # 20 s this time
+    [c] = _search(s, 32.1)
+    s.on_result(c, False, {"message": BLOCKED}, now=33.0)
+    notes = s.take_notes()
+    assert any("leg blocked 3 times" in n and "given up" in n for n in notes), notes
+    assert _search(s, 500.0) == []         # dropped by this robot for good
+    assert not s.book.ok(AgentView("0"), C.SEARCH_INDOOR, DOOR)
+    assert s.book.ok(AgentView("2"), C.SEARCH_INDOOR, DOOR)   # another robot may still take it
+
+
+def test_other_failures_are_retried_without_back_off():
+    s = Strategy(StrategyParams(max_failures=10))
+    [c] = _search(s, 0.0)
+    s.on_result(c, False, {"message": "the UAL is not ready"}, now=1.0)
+    assert len(_search(s, 1.5)) == 1
+    assert s.take_notes() == []
+
+
+def test_the_back_off_ends_when_sim_time_goes_back():
+    s = Strategy(StrategyParams(max_failures=10))
+    [c] = _search(s, 500.0)
+    s.on_result(c, False, {"message": BLOCKED}, now=500.0)
+    assert _search(s, 501.0) == []
+    assert len(_search(s, 2.0)) == 1       # a restarted simulation: no wait of 500 s
+
+
+FIRE_7 = (24.2, 8.2, 8.25)    # a facade fire of floor 1
+FIRE_5 = (11.4, 14.5, 10.5)   # a facade fire of floor 2
+
+
+def _uav_world(fire5_status=C.STATUS_ACTIVE):
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *G.viewpoint(FIRE_7)[:3], ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    fires = {7: FireView(7, *FIRE_7, C.KIND_FACADE), 5: FireView(5, *FIRE_5, C.KIND_FACADE, fire5_status)}
+    return WorldView(0.0, {"2": a}, fires)
+
+
+def _abort(s, agent_id, text):
+    cmd = Command(agent_id, C.EXTINGUISH_FACADE_FIRE, {"fire_id": 7, "_floor": 1}, "water on fire 7", 7)
+    s.on_sent(cmd)
+    s.on_result(cmd, False, {"message": text, "extinguished": False}, now=0.0)
+
+
+def _on_fire(cmds, fid):
+    return [c for c in cmds if c.target == fid or c.goal.get("fire_id") == fid]
+
+
+def test_a_facade_fire_not_seen_hot_twice_is_probably_out_and_left_while_other_work_remains():
+    s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
+    assert _on_fire(s.decide(_uav_world()), 7)          # nearest: fire 7, in front of the UAV
+    s.book.in_flight.clear()
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)                            # two robots, water pumped on the hole each time
+    notes = s.take_notes()
+    assert any("facade fire 7" in n and "probably out" in n for n in notes), notes
+    cmds = s.decide(_uav_world())
+    assert cmds and not _on_fire(cmds, 7)              # before: UAV 2 sent to fire 7 again (1 failure < 3)
+    s.book.in_flight.clear()
+    # nothing else left (fire 5 out): fire 7 is revisited while time remains
+    assert _on_fire(s.decide(_uav_world(C.STATUS_EXTINGUISHED)), 7)
+
+
+def test_a_facade_fire_merely_not_found_is_not_probably_out():
+    s = Strategy(StrategyParams(facade_searches=0, indoor_floors=(), max_failures=10))
+    _abort(s, "2", "fire 7 not found")
+    _abort(s, "3", "no water flows: the tank level stayed at 1.00 L for 5 s with the pump on")
+    _abort(s, "2", NOT_HOT)                            # one 'not seen hot' only: below the limit
+    assert s.take_notes() == []
+    assert _on_fire(s.decide(_uav_world()), 7)
