@@ -117,3 +117,21 @@ def test_a_facade_fire_merely_not_found_is_not_probably_out():
     _abort(s, "2", NOT_HOT)                            # one 'not seen hot' only: below the limit
     assert s.take_notes() == []
     assert _on_fire(s.decide(_uav_world()), 7)
+
+
+def test_the_phrases_matched_are_the_agents_own():
+    """The central unit matches the agents' abort texts (no structured field in the results): a change of
+    wording in mbzirc_agents must fail here, not silently turn the rules off."""
+    import os
+    from mbzirc_central_unit.failure_rules import LEG_BLOCKED_TEXT, NOT_SEEN_HOT_TEXT
+    agents = os.path.join(os.path.dirname(__file__), "..", "..", "..", "mbzirc_agents", "src", "mbzirc_agents")
+    with open(os.path.join(agents, "leg_guard.py"), encoding="utf-8") as f:
+        assert LEG_BLOCKED_TEXT in f.read()
+    with open(os.path.join(agents, "tasks", "cold_check.py"), encoding="utf-8") as f:
+        assert f"NOT_SEEN_HOT = '{NOT_SEEN_HOT_TEXT}" in f.read()
+    # as logged in realistic seed 103 (fire 16) and 106 (the UGV's door search)
+    assert failure_kind(C.EXTINGUISH_FACADE_FIRE, "fire 16 not seen hot from the watering pose: not judged out: 3 s "
+                        "of water on its hole (seen through) without a hot answer there; left active") == NOT_SEEN_HOT
+    assert failure_kind(C.SEARCH_INDOOR, "waypoint 4: leg 1/1 to (19.5, 11.0): a laser return 0.96 m ahead blocks "
+                        "the leg to (19.5, 11.0) (0.7 m left; guard: 1.10 m ahead, +-0.90 m aside): holding") \
+        == LEG_BLOCKED
