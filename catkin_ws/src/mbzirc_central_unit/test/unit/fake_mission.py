@@ -33,6 +33,7 @@ class FakeMission:
     fires: dict = field(default_factory=dict)
     water_in: dict = field(default_factory=dict)
     log: list = field(default_factory=list)
+    now_of: list = field(default_factory=list)   # sim time of each log entry
     silent: set = field(default_factory=set)
     fail_tasks: set = field(default_factory=set)  # (agent, task) that always abort
 
@@ -67,7 +68,8 @@ class FakeMission:
             self.strategy.on_sent(cmd)
             ok, result = self.apply(cmd)
             self.log.append((cmd, ok))
-            self.strategy.on_result(cmd, ok, result)
+            self.now_of.append(self.now)
+            self.strategy.on_result(cmd, ok, result, self.now)
         return cmds
 
     def all_out(self) -> bool:

@@ -135,3 +135,24 @@ def test_the_phrases_matched_are_the_agents_own():
     assert failure_kind(C.SEARCH_INDOOR, "waypoint 4: leg 1/1 to (19.5, 11.0): a laser return 0.96 m ahead blocks "
                         "the leg to (19.5, 11.0) (0.7 m left; guard: 1.10 m ahead, +-0.90 m aside): holding") \
         == LEG_BLOCKED
+
+
+def test_a_room_whose_legs_a_uav_finds_blocked_is_tried_three_times_backed_off_and_the_mission_goes_on():
+    from fake_mission import FakeMission
+
+    class BlockedRoom(FakeMission):
+        """UAV 2's legs in room 1 of floor 1 (fire 7's) are always blocked (its way in and out are not)."""
+        def apply(self, cmd):
+            if (cmd.agent_id, cmd.task, cmd.target) == ("2", C.SEARCH_INDOOR, (1, 1)):
+                return False, {"message": BLOCKED}
+            return super().apply(cmd)
+
+    m = BlockedRoom(strategy=Strategy(StrategyParams(leg_blocked_backoff=25.0)))   # fake steps of 10 s
+    assert m.run(400) > 0                                  # every fire out
+    tries = [m.now_of[i] for i, (c, ok) in enumerate(m.log)
+             if (c.agent_id, c.task, c.target) == ("2", C.SEARCH_INDOOR, (1, 1))]
+    assert len(tries) == 3, tries                          # bounded
+    assert tries[1] - tries[0] >= 25.0 and tries[2] - tries[1] >= 50.0   # backed off, longer each time
+    # the fire there, found meanwhile, is put out from its viewpoint (another target)
+    assert any(c.task == C.EXTINGUISH_INDOOR_FIRE and c.target == 7 and ok for c, ok in m.log)
+    assert any("given up by this robot" in n for n in m.strategy.take_notes())
