@@ -320,8 +320,8 @@ class CentralUnit:
                 "payload": a.payload if a else "",
                 "pos": [round(v, 1) for v in a.position] if a else None,
             }
-        fires = [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "status": f.status}
-                 for f in world.fires.values()]
+        fires = [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "status": f.status,
+                  "probably_out": self.strategy.probably_out(f.fire_id)} for f in world.fires.values()]
         self.status_pub.publish(String(json.dumps({"t": round(world.now, 1), "agents": agents, "fires": fires,
                                                    "floor_owner": self.strategy.floor_owner,
                                                    "indoor_owner": self.strategy.indoor_owner,

@@ -80,6 +80,10 @@ class Strategy:
         """Transit altitude of a UAV (see transit.Router.altitude)."""
         return self.router.altitude(agent_id)
 
+    def probably_out(self, fire_id: int) -> bool:
+        """A facade fire repeatedly not seen hot after water on its hole (failure_rules.py), for the status."""
+        return self.book.unconfirmed.probably_out(fire_id)
+
     def broken(self, agent_id: str) -> bool:
         """An agent that gets no more work (see bookkeeping.Bookkeeping.broken)."""
         return self.book.broken(agent_id)

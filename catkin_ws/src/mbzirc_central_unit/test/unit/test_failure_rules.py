@@ -103,6 +103,7 @@ def test_a_facade_fire_not_seen_hot_twice_is_probably_out_and_left_while_other_w
     _abort(s, "3", NOT_HOT)                            # two robots, water pumped on the hole each time
     notes = s.take_notes()
     assert any("facade fire 7" in n and "probably out" in n for n in notes), notes
+    assert s.probably_out(7) and not s.probably_out(5)   # shown on /central_unit/status
     cmds = s.decide(_uav_world())
     assert cmds and not _on_fire(cmds, 7)              # before: UAV 2 sent to fire 7 again (1 failure < 3)
     s.book.in_flight.clear()
@@ -115,7 +116,7 @@ def test_a_facade_fire_merely_not_found_is_not_probably_out():
     _abort(s, "2", "fire 7 not found")
     _abort(s, "3", "no water flows: the tank level stayed at 1.00 L for 5 s with the pump on")
     _abort(s, "2", NOT_HOT)                            # one 'not seen hot' only: below the limit
-    assert s.take_notes() == []
+    assert s.take_notes() == [] and not s.probably_out(7)
     assert _on_fire(s.decide(_uav_world()), 7)
 
 
