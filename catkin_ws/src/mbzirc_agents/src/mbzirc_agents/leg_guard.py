@@ -115,6 +115,16 @@ class LegGuard:
             return None
         return scan[0], scan[2]
 
+    def points(self) -> Optional[np.ndarray]:
+        """The latest fresh scan's returns in the arena frame (scan_points, with the pose of its arrival);
+        None without a fresh scan."""
+        fresh = self._fresh()
+        if fresh is None:
+            return None
+        msg, then = fresh
+        return scan_points(msg.ranges, msg.angle_min, msg.angle_increment, then, msg.range_min,
+                           msg.range_max if msg.range_max > 0 else math.inf)
+
     def stop_when(self, target: Sequence[float], tolerance: float):
         """A stop_when for RobotAgent.move_to on the straight leg to target: True (and `reason` set) when the
         laser sees the leg blocked; always False with ~leg_guard off."""
@@ -122,14 +132,11 @@ class LegGuard:
             a = self.agent
             if not a.p.leg_guard:
                 return False
-            fresh = self._fresh()
-            if fresh is None:
+            points = self.points()
+            if points is None:
                 a.backend.logerr_throttle(5.0, f'[{self.task.name}] leg guard: no fresh laser scan, the leg goes '
                                                 'on unchecked')
                 return False
-            msg, then = fresh
-            points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, then, msg.range_min,
-                                 msg.range_max if msg.range_max > 0 else math.inf)
             here = a.position()
             d = blocking_distance(points, here, target, a.p.leg_guard_half_width, a.p.leg_guard_stop_distance,
                                   tolerance)

@@ -106,6 +106,13 @@ class AgentParams:
                                          "robot's half width plus a margin")
     leg_guard_stop_distance: float = _param(0.9, 'm ahead of the robot centre (the laser) within which a return '
                                             'in that corridor stops the leg: its radius plus a stopping gap')
+    wall_clearance: bool = _param(True, 'indoors, the watering pose stops at ~indoor_fire_distance from the wall the '
+                                  'laser sees ahead, and the robot holding there keeps ~min_wall_clearance from '
+                                  'every wall (wall_clearance.py)')
+    min_wall_clearance: float = _param(1.0, 'm from the robot centre (the laser) to the nearest wall return '
+                                       'below which a robot holding indoors backs off: its radius plus a gap '
+                                       'for gusts and GNSS drift')
+    wall_clearance_margin: float = _param(0.2, 'm beyond ~min_wall_clearance a back-off goes to (hysteresis)')
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')

@@ -13,6 +13,8 @@ import numpy as np
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
+from ..leg_guard import LegGuard
+from ..wall_clearance import back_off, stop_short
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .passage import LaserPassage, crosses_outline
@@ -158,6 +160,12 @@ class ExtinguishIndoorFire(AgentTask):
     """Face the fire at ~indoor_fire_distance (from the side the robot is on), turn until the thermal hot
     spot is straight ahead, and pump until cold.
 
+    Walls (wall_clearance.py, ~wall_clearance): the approach stops at ~indoor_fire_distance from the wall its
+    laser sees ahead, and while the robot checks, aims and pumps it backs off any wall nearer than
+    ~min_wall_clearance. Why: the watering pose is placed on the fire's GNSS-frame estimate and held on the
+    robot's own drifting GNSS fix (realistic seeds 104, 106: a UAV holding its watering pose on floor 2 hit
+    the interior wall the fire is on).
+
     When it is out (tasks/cold_check.py): seen hot from the watering pose, then cold C.COLD_CHECKS times in a
     row with water flowing at it (the tank level dropping) from that pose. A fire never seen hot from there
     is never reported out: the goal fails with why, and the central unit tries again or gives it to
@@ -167,6 +175,50 @@ class ExtinguishIndoorFire(AgentTask):
     def __init__(self, name, agent, **args) -> None:
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
+        self.walls = LegGuard(self)                      # its laser scans (the wall clearance's returns)
+
+    def _wall_points(self) -> Optional[np.ndarray]:
+        """The laser's returns for the wall clearance; None when it is off or without a fresh scan (said)."""
+        a = self.agent
+        if not a.p.wall_clearance:
+            return None
+        points = self.walls.points()
+        if points is None:
+            a.backend.logerr_throttle(5.0, f'[{self.name}] wall clearance: no fresh laser scan, the distance to '
+                                            'the walls is unchecked')
+        return points
+
+    def _laser_standoff(self, pos: tuple) -> tuple:
+        """The watering position pos, moved back along the approach to ~indoor_fire_distance from the wall the
+        laser sees ahead when the GNSS estimate puts it nearer."""
+        a = self.agent
+        points = self._wall_points()
+        if points is None:
+            return pos
+        here = a.position()
+        short = stop_short(points, here, pos, a.p.leg_guard_half_width, a.p.indoor_fire_distance)
+        if short is None:
+            return pos
+        a.backend.loginfo(f'[{self.name}] watering pose stops {math.dist(short, pos[:2]):.2f} m short of its '
+                          f'GNSS estimate: {a.p.indoor_fire_distance:.2f} m from the wall the laser sees ahead')
+        return (float(short[0]), float(short[1]), pos[2])
+
+    def _keep_off_walls(self, yaw: float) -> Optional[np.ndarray]:
+        """Back off (heading yaw) from walls nearer than ~min_wall_clearance by the laser; the x, y, z sent,
+        None when the robot is clear (or unchecked)."""
+        a = self.agent
+        points = self._wall_points()
+        if points is None:
+            return None
+        here = a.position()
+        off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
+        if off is None:
+            return None
+        to = np.array([here[0] + off[0], here[1] + off[1], here[2]])
+        a.send_waypoint(to[0], to[1], to[2], yaw)
+        a.backend.loginfo_throttle(2.0, f'[{self.name}] a wall nearer than {a.p.min_wall_clearance:.2f} m by '
+                                        f'the laser: backing off {math.hypot(off[0], off[1]):.2f} m')
+        return to
 
     def _sighted_bearing(self, since: float, wait: float) -> Optional[tuple]:
         """(bearing, heading then) of the thermal camera's fire in a detection whose image was taken after
@@ -227,6 +279,7 @@ class ExtinguishIndoorFire(AgentTask):
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
+        pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
         self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
@@ -264,6 +317,8 @@ class ExtinguishIndoorFire(AgentTask):
         it, the robot turns back where it stands. It is never driven back to the pose's GNSS position: a
         robot holds its own set-point, and a drive to a GNSS position moves it by the drift of the GNSS
         error since (realistic seed 103: the UGV moved 0.37 m and its jet hit 0.5 m beside the hole).
+        The one move it makes: backing off a wall its laser sees nearer than ~min_wall_clearance (a relative
+        move from where it is; the watering pose moves with it).
         A pump that moves no water for
         cold_check.NO_FLOW_TIME fails the goal.
         """
@@ -295,6 +350,9 @@ class ExtinguishIndoorFire(AgentTask):
                 at_pose = self._at(pose, here)
                 if not self._heading_at(pose, here):
                     a.send_waypoint(here[0], here[1], here[2], pose[3])   # turned away: back, where it stands
+                backed = self._keep_off_walls(pose[3])           # last: its set-point is the one held
+                if backed is not None:
+                    pose[:3] = backed                            # the watering pose moves with it
                 watered = flow.update(a.water_level, a.backend.now()) and at_pose
                 if cold.update(a.fire_detected(), watered):
                     break
@@ -338,6 +396,7 @@ class ExtinguishIndoorFire(AgentTask):
             if self.agent.backend.now() >= end:
                 return False
             self.sleep(0.25)
+            self._keep_off_walls(self.agent.position()[3])
 
     def _well_localised(self, fire_id: int) -> bool:
         """A confirmed track known to ~top_up_max_std: a real fire, not a stray estimate.

@@ -1,0 +1,71 @@
+"""Wall clearance indoors, measured by the robot's own laser: the standoff of a watering pose from the wall
+it faces, and the least distance kept from every wall while the robot holds there.
+
+Why: indoors a watering pose is placed on the fire's GNSS-frame estimate, and a robot flies to it and holds
+it on its own GNSS fix; both carry errors of ~0.7 m that drift (realistic seeds 104 and 106: a UAV's
+watering pose on floor 2 was truly ~0.7 m off the interior wall the fire is on, and while it held there its
+GNSS error drifted towards the wall: it hit the wall). The laser measures the walls as they are.
+
+Rules:
+- the approach stops at `standoff` from the nearest wall return ahead along the approach's horizontal
+  direction (the leg guard's corridor, leg_guard.corridor_distances), never nearer than its GNSS target:
+  the laser only shortens the way (or backs out, when the robot already is nearer than the standoff);
+- while holding, a robot whose nearest returns are nearer than `min_clearance` backs off away from them
+  (from the mean of the returns within that distance) to `min_clearance + margin`: the margin is the
+  hysteresis, so that a set-point is not re-sent for noise;
+- at least leg_guard.MIN_BEAMS returns make a wall (one stray return moves nothing).
+Pure geometry here (no ROS); the task's use of it is in tasks/indoor.py.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .leg_guard import MIN_BEAMS, corridor_distances
+
+
+def wall_ahead(points: np.ndarray, here: Sequence[float], direction: Sequence[float], half_width: float,
+               reach: float) -> Optional[float]:
+    """Distance ahead along the unit direction of the nearest wall return in the corridor of half_width,
+    no farther than reach; None without a wall there."""
+    ahead = np.sort(corridor_distances(points, here, direction, half_width, reach))
+    return float(ahead[MIN_BEAMS - 1]) if ahead.size >= MIN_BEAMS else None
+
+
+def stop_short(points: np.ndarray, here: Sequence[float], target: Sequence[float], half_width: float,
+               standoff: float) -> Optional[np.ndarray]:
+    """The x, y on the horizontal line from here to target that is `standoff` from the wall the laser sees
+    ahead along it, when that is short of target; None when target already keeps the standoff (or no wall)."""
+    d = np.asarray(target[:2], dtype=float) - np.asarray(here[:2], dtype=float)
+    length = float(np.hypot(d[0], d[1]))
+    if length < 1e-6:
+        return None
+    u = d / length
+    wall = wall_ahead(points, here, u, half_width, length + standoff)
+    if wall is None or wall - standoff >= length:
+        return None
+    return np.asarray(here[:2], dtype=float) + u * (wall - standoff)
+
+
+def back_off(points: np.ndarray, here: Sequence[float], min_clearance: float,
+             margin: float) -> Optional[np.ndarray]:
+    """The horizontal offset (x, y) that moves a robot at here whose nearest wall returns are nearer than
+    min_clearance away from them to min_clearance + margin; None when it keeps min_clearance."""
+    if len(points) == 0:
+        return None
+    rel = np.asarray(points, dtype=float) - np.asarray(here[:2], dtype=float)
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    near = dist < min_clearance
+    if np.count_nonzero(near) < MIN_BEAMS:
+        return None
+    towards = rel[near].mean(axis=0)
+    norm = float(np.hypot(towards[0], towards[1]))
+    if norm < 1e-6:
+        return None
+    nearest = float(np.sort(dist[near])[MIN_BEAMS - 1])
+    return -towards / norm * (min_clearance + margin - nearest)
+
+
+__all__ = ['back_off', 'stop_short', 'wall_ahead']
