@@ -170,8 +170,7 @@ class ExtinguishGroundFire(AgentTask):
         old: its body-relative position turned by the heading the image was taken with, less the UAV's own
         move since (both from its own pose: the GNSS error cancels); None without one."""
         a = self.agent
-        with self.sensed.lock:
-            det, stamp = self.sensed.fire, self.sensed.fire_time
+        det, stamp = self.sensed.latest_fire()
         if det is None or det[2] != C.CAMERA_DOWNWARD or a.backend.now() - stamp > SIGHT_MAX_AGE:
             return None
         rel = np.asarray(det[1], dtype=float)

@@ -9,6 +9,7 @@ import math
 from typing import Optional
 
 import numpy as np
+from mbzirc_arena.yaw import wrap_angle
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
@@ -227,8 +228,7 @@ class ExtinguishIndoorFire(AgentTask):
         a = self.agent
         end = a.backend.now() + wait
         while True:
-            with self.sensed.lock:
-                fire, stamp = self.sensed.fire, self.sensed.fire_time
+            fire, stamp = self.sensed.latest_fire()
             if fire is not None and stamp > since:
                 bearing = math.atan2(fire[1][1], fire[1][0])
                 return (bearing, a.pose_at(stamp)[3]) if math.isfinite(bearing) else None
@@ -260,15 +260,19 @@ class ExtinguishIndoorFire(AgentTask):
         """Turn where it stands to heading yaw (no translation: the robot stays where it sees the fire from)
         and wait until it points there (at most AIM_TURN_TIME s); returns yaw."""
         a = self.agent
-        p = a.position()
-        self.feedback('AIMING', f'turning {math.degrees(math.remainder(yaw - p[3], 2 * math.pi)):.0f} deg '
-                                'to the hot spot')
-        a.send_waypoint(p[0], p[1], p[2], yaw)
+        p = self._turn_in_place(yaw)
+        self.feedback('AIMING', f'turning {math.degrees(wrap_angle(yaw - p[3])):.0f} deg to the hot spot')
         end = a.backend.now() + AIM_TURN_TIME
-        while (abs(math.remainder(a.position()[3] - yaw, 2 * math.pi)) > a.p.aim_bearing_tolerance / 2
-               and a.backend.now() < end):
+        while abs(wrap_angle(a.position()[3] - yaw)) > a.p.aim_bearing_tolerance / 2 and a.backend.now() < end:
             self.sleep(0.1)
         return yaw
+
+    def _turn_in_place(self, yaw: float):
+        """Hold where the robot is now, heading yaw; the pose it was at. No translation: a drive to a GNSS
+        position moves the robot by its GNSS error's drift, off where it sees the fire from."""
+        p = self.agent.position()
+        self.agent.send_waypoint(p[0], p[1], p[2], yaw)
+        return p
 
     def run(self, ud) -> str:
         a = self.agent
@@ -349,7 +353,7 @@ class ExtinguishIndoorFire(AgentTask):
                 here = a.position()
                 at_pose = self._at(pose, here)
                 if not self._heading_at(pose, here):
-                    a.send_waypoint(here[0], here[1], here[2], pose[3])   # turned away: back, where it stands
+                    self._turn_in_place(pose[3])                 # turned away: back, where it stands
                 backed = self._keep_off_walls(pose[3])           # last: its set-point is the one held
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
@@ -374,13 +378,12 @@ class ExtinguishIndoorFire(AgentTask):
         seen = self._sighted_bearing(a.backend.now() - AIM_MAX_AGE, 0.0)
         if seen is None or abs(seen[0]) < a.p.aim_bearing_tolerance:
             return yaw
-        p = a.position()
         yaw = seen[1] + seen[0]
-        a.send_waypoint(p[0], p[1], p[2], yaw)
+        self._turn_in_place(yaw)
         return yaw
 
     def _heading_at(self, pose, here) -> bool:
-        return abs(math.remainder(here[3] - pose[3], 2 * math.pi)) <= self.agent.p.yaw_tolerance
+        return abs(wrap_angle(here[3] - pose[3])) <= self.agent.p.yaw_tolerance
 
     def _at(self, pose, here) -> bool:
         """Still at the watering pose (position and heading): looking where the fire was seen hot."""

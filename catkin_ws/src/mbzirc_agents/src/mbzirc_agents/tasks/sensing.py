@@ -105,6 +105,12 @@ class SensedObjects:
         pose = self.task.agent.position()
         return [Hole(world_to_body(w - pose[:3], pose[3]), r, o) for w, r, o in holes]
 
-    def recent_fire(self, max_age: float) -> Optional[tuple]:
+    def latest_fire(self) -> tuple:
+        """(fire, stamp) of the last fire detection, read together: (None, -1e9) without one. The stamp is
+        its image's, for the pose the robot had when it was taken (RobotAgent.pose_at)."""
         with self.lock:
-            return self.fire if self.task.agent.backend.now() - self.fire_time <= max_age else None
+            return self.fire, self.fire_time
+
+    def recent_fire(self, max_age: float) -> Optional[tuple]:
+        fire, stamp = self.latest_fire()
+        return fire if self.task.agent.backend.now() - stamp <= max_age else None
