@@ -128,8 +128,8 @@ class Arena:
         return tuple(b.footprint for b in self.buildings)
 
     def classify_fire(self, position: Sequence[float]) -> int:
-        """Object SUBTYPE_* of a fire at position (rule: `buildings.classify_fire`)."""
-        return B.classify_fire(position, self.footprints)
+        """Object SUBTYPE_* of a fire at position (rule: `buildings.classify_fire`, with the facade holders)."""
+        return B.classify_fire(position, self.footprints, self.facade_holder_positions)
 
     # ---- holders, openings, homes --------------------------------------------------------------------
     @property

@@ -59,13 +59,22 @@ def in_footprint(p: Sequence[float], footprints: Sequence[Sequence[float]], marg
 # the open. Indoor holders are metres inside the outer walls and ground fires far from every wall.
 INDOOR_DEPTH = 1.5      # m inside a footprint before a fire counts as indoors
 GROUND_DISTANCE = 2.0   # m from every wall before a low fire counts as a ground fire
+# Facade fires burn only in the facade holders, whose places a team knows before the trial. A fire estimated
+# inside a building less than INDOOR_DEPTH from a wall, but farther than this from every facade holder, is an
+# indoor fire near that wall (the west indoor holders are 1.8 m inside facade A's side wall, which has no
+# holder): its estimate moved a few decimetres outwards under GNSS error must not turn it into a facade fire
+# that no search looks for. A facade fire's estimate lies within about a metre and a half of its holder.
+FACADE_HOLDER_REACH = 3.0   # m (3D) from a facade holder within which a fire may be that holder's
 
 
-def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float]]) -> int:
+def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float]],
+                  facade_holders: Sequence[Sequence[float]] = ()) -> int:
     """Object SUBTYPE_* of a fire at position, from where it is.
 
     Rules: more than INDOOR_DEPTH inside a footprint, under its roof -> INDOOR; lower than 1.5 m and more
-    than GROUND_DISTANCE from every wall rising to that height -> GROUND; else (on or near a wall) -> FACADE.
+    than GROUND_DISTANCE from every wall rising to that height -> GROUND; else (on or near a wall) -> FACADE,
+    except, when the facade holders are given, a fire inside a footprint under its roof and farther than
+    FACADE_HOLDER_REACH from every holder -> INDOOR (no facade fire can burn there).
     """
     under = standing_at(position, footprints, 0.0)   # nothing is indoors above a roof
     if in_footprint(position, under, margin=-INDOOR_DEPTH):
@@ -73,4 +82,7 @@ def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float
     _, d = nearest_face(position, under)
     if position[2] < 1.5 and d > GROUND_DISTANCE:
         return M.SUBTYPE_GROUND
+    if facade_holders and in_footprint(position, under) and all(
+            math.dist(position[:3], h[:3]) > FACADE_HOLDER_REACH for h in facade_holders):
+        return M.SUBTYPE_INDOOR
     return M.SUBTYPE_FACADE

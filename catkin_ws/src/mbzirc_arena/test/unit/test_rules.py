@@ -110,3 +110,18 @@ def test_facade_fires_placed_a_metre_off_stay_facade(off):
     for h in c3.FACADE_HOLDERS:
         p = tuple(h[k] + off[k] for k in range(3))
         assert c3.classify_fire(p) == M.SUBTYPE_FACADE, p
+
+
+@pytest.mark.parametrize('p', [(17.53, 8.09, 11.7), (18.35, 7.61, 6.3), (17.75, 7.83, 1.35), (17.7, 7.0, 11.5)])
+def test_indoor_fire_near_a_wall_without_holder_stays_indoor(p):
+    """Realistic seeds 101-108: the west indoor fires (1.8 m inside facade A's side wall, which has no facade
+    holder) were estimated 0.4-0.9 m towards that wall, classified FACADE and never searched for again."""
+    assert c3.classify_fire(p) == M.SUBTYPE_INDOOR
+    assert B.classify_fire(p, c3.FOOTPRINTS) == M.SUBTYPE_FACADE      # the rule without the holders
+
+
+def test_facade_fire_far_inside_its_building_from_its_holder_is_still_facade_within_reach():
+    """(22.74, 7.77, 8.09): facade D's fire at (24.2, 8.2, 8.25) estimated 1.5 m inside the tower."""
+    assert c3.classify_fire((22.74, 7.77, 8.09)) == M.SUBTYPE_FACADE
+    # outside every footprint a fire is never indoors, holders or not
+    assert c3.classify_fire((17.7, 5.5, 11.5)) == M.SUBTYPE_FACADE

@@ -103,6 +103,9 @@ class ObjectEstimator:
         pose_std: standard deviation (m) of the robots' own position error (standard GNSS). It is a bias
             that wanders slowly, so it does not average out over one robot's detections: it is added to
             every detection's covariance, and no fused track is more certain than it.
+        facade_holders: (x, y, z) of the facade fire holders (known before the trial): a fire inside a
+            building near a wall but far from every holder is indoors (`classify_fire`); without them an
+            indoor fire 1.8 m inside a wall became a facade fire once GNSS error moved its estimate 0.4 m.
     """
 
     def __init__(self, gates: Optional[Dict[int, float]] = None, default_gate: float = 2.0,
@@ -110,7 +113,7 @@ class ObjectEstimator:
                  default_covariance: Sequence[float] = (1.5, 1.5, 0.5), process_noise: float = 1e-3,
                  buildings: Sequence[Sequence[float]] = c3.FOOTPRINTS, chi2_gate: float = 16.27,
                  merge_distances: Optional[Dict[int, float]] = None, min_std: float = 0.4,
-                 pose_std: float = 0.0) -> None:
+                 pose_std: float = 0.0, facade_holders: Sequence[Sequence[float]] = c3.FACADE_HOLDERS) -> None:
         self.min_var = float(min_std) ** 2
         self.pose_var = float(pose_std) ** 2 if math.isfinite(pose_std) else 0.0
         self.merge_distances = dict(merge_distances or {C.TYPE_FIRE: 1.5, C.TYPE_HOLE: 0.15})
@@ -122,6 +125,7 @@ class ObjectEstimator:
         self.default_cov = np.diag(np.asarray(default_covariance, dtype=float))
         self.process_noise = float(process_noise)
         self.buildings = [tuple(b) for b in buildings]
+        self.facade_holders = [tuple(h) for h in facade_holders]
         self.tracks: Dict[int, Track] = {}
         self._next_id = 1
         self._born = 0
@@ -156,7 +160,7 @@ class ObjectEstimator:
             track = self._merge_near(track)
         track.agents.add(det.agent_id)
         if track.type == C.TYPE_FIRE:
-            track.sub_type = classify_fire(track.position, self.buildings)
+            track.sub_type = classify_fire(track.position, self.buildings, self.facade_holders)
         if track.status not in STICKY:
             if track.num_updates >= self.min_updates:
                 track.status = C.STATUS_ACTIVE

@@ -195,3 +195,25 @@ def test_pose_error_keeps_the_track_covariance_honest():
             assert var.min() >= lowest - 1e-9
         else:
             assert var.min() < 0.05
+
+
+def test_indoor_fire_estimated_towards_a_wall_without_holder_stays_indoor():
+    """Realistic seed 108: the floor-2 indoor fire at (17.7, 8.5, 11.5), 1.8 m inside a wall with no facade
+    holder, was estimated at y 8.09 while a UAV watered it: its track became a FACADE fire, search_indoor
+    reported 'no indoor fire found on floor 2' a dozen times and the fire burned to the end."""
+    est = ObjectEstimator(min_updates=3)
+    for k in range(10):
+        est.add(det((17.7, 8.5, 11.5), t=k * 0.1))
+    track = est.objects()[0]
+    assert track.sub_type == C.SUBTYPE_INDOOR
+    for k in range(200):                        # a drifting fix while watering: seen 0.6 m towards the wall
+        est.add(det((17.5, 7.9, 11.7), t=1.0 + k * 0.1))
+    assert est.tracks[track.id].position[1] < 8.2       # past the 1.5 m indoor depth of the footprint rule
+    assert est.tracks[track.id].sub_type == C.SUBTYPE_INDOOR
+
+
+def test_facade_fire_estimated_inside_stays_facade():
+    est = ObjectEstimator(min_updates=3)
+    for k in range(10):
+        est.add(det((22.9, 8.0, 8.2), t=k * 0.1))       # facade D's holder (24.2, 8.2, 8.25), 1.3 m inside
+    assert est.objects()[0].sub_type == C.SUBTYPE_FACADE
