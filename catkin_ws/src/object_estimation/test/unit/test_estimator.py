@@ -217,3 +217,30 @@ def test_facade_fire_estimated_inside_stays_facade():
     for k in range(10):
         est.add(det((22.9, 8.0, 8.2), t=k * 0.1))       # facade D's holder (24.2, 8.2, 8.25), 1.3 m inside
     assert est.objects()[0].sub_type == C.SUBTYPE_FACADE
+
+
+def test_indoor_fire_of_the_storey_below_gets_its_own_track():
+    """Realistic seed 108 (after the holder rule): the floor-2 fire's track (17.7, 8.5, 11.5) was LOST while
+    its UAV refilled; the floor-1 fire right below it, placed 0.5 m high by a UAV's vertical GNSS error, fell
+    inside the chi-square gate (4.5 m in z with the pose error) and became 'fire 15, floor 1': one track for two
+    fires, and the floor-2 fire was never looked for again."""
+    est = ObjectEstimator(min_updates=3, pose_std=0.7)
+    for k in range(30):
+        est.add(det((17.6, 8.3, 11.6), t=k * 0.1, agent='2'))
+    est.tick(100.0)
+    upper = est.objects()[0]
+    assert upper.status == C.STATUS_LOST and upper.sub_type == C.SUBTYPE_INDOOR
+    for k in range(30):
+        est.add(det((17.6, 8.3, 7.2), t=100.0 + k * 0.1, agent='3'))
+    assert len(est.objects()) == 2
+    lower = [t for t in est.objects() if t.id != upper.id][0]
+    assert est.tracks[upper.id].position[2] > 11.0 and lower.position[2] < 8.0
+
+
+def test_facade_fire_seen_from_two_storeys_stays_one_track():
+    """Facade holders stand near floor boundaries (10.25, 10.5 m): a facade fire's estimates on both sides of
+    the 10 m slab are one fire (the storey rule is for indoor fires only)."""
+    est = ObjectEstimator(min_updates=3, pose_std=0.7)
+    for k in range(20):
+        est.add(det((11.9, 14.5, 10.3 + (0.6 if k % 2 else -0.6)), t=k * 0.1))
+    assert len(est.objects()) == 1 and est.objects()[0].sub_type == C.SUBTYPE_FACADE
