@@ -115,6 +115,12 @@ class AgentParams:
     wall_clearance_margin: float = _param(0.2, 'm beyond ~min_wall_clearance a back-off goes to (hysteresis)')
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')
+    aim_height_tolerance: float = _param(0.05, 'm: a UAV whose indoor fire is this near the height its jet lands '
+                                         'at (by the thermal image) is level with it (else it climbs or sinks)')
+    aim_height_step: float = _param(0.3, 'm at most of one height correction onto an indoor fire')
+    aim_height_range: float = _param(1.0, 'm at most a UAV moves up or down from its watering height to aim')
+    jet_rise: float = _param(0.0, 'm the jet lands above the thermal camera\'s optical axis at '
+                             '~indoor_fire_distance (the robot\'s nozzle and camera mounting; 0: level)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
     top_up_max_std: float = _param(1.0, 'm: a track is well localised for a top-up when its position std is '
                                         'at most this (above the estimator\'s ~pose_std floor, 0.7 m)')

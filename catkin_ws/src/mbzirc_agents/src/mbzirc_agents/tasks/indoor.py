@@ -6,7 +6,7 @@ the sub-task `move` (UAV: a straight go_to; UGV: a straight drive), given by the
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 from mbzirc_arena.yaw import wrap_angle
@@ -23,10 +23,18 @@ from .sensing import SensedObjects
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
-AIM_TRIES = 5              # turns to the hot spot before pumping, each measured on an image taken after it
+AIM_TRIES = 6              # turns (and climbs) to the hot spot before pumping, each measured on a new image
 AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
 AIM_MAX_AGE = 0.5          # s: an older detection no longer turns the robot while it pumps
+
+
+class Sighting(NamedTuple):
+    """Where the thermal camera saw the fire in one image, and the pose it was taken from (pose_at)."""
+    bearing: float   # rad of the hot spot off the heading the image was taken with
+    yaw: float       # that heading
+    rise: float      # m the hot spot lies above the camera's optical axis (body frame z)
+    z: float         # the (GNSS) height the image was taken at
 
 
 def gen_enter_building(goal, agent) -> dict:
@@ -167,8 +175,15 @@ class ExtinguishIndoorFire(AgentTask):
     robot's own drifting GNSS fix (realistic seeds 104, 106: a UAV holding its watering pose on floor 2 hit
     the interior wall the fire is on).
 
+    Aim (UAV): the height too is steered on the thermal image, so that the hot spot sits where the jet lands
+    (~jet_rise above the optical axis): the watering height comes from the fire estimate and is held on the
+    GNSS height, whose error (0.3-0.5 m, wandering) puts a jet of a few cm beside a 0.15 m hole (realistic
+    seed 108: 2 L shot at each floor-1/2 fire, the fires left at 13-91 %).
+
     When it is out (tasks/cold_check.py): seen hot from the watering pose, then cold C.COLD_CHECKS times in a
-    row with water flowing at it (the tank level dropping) from that pose. A fire never seen hot from there
+    row with water flowing at it (the tank level dropping) from that pose, the jet's height on the hot spot
+    as last seen (a UAV whose last sighting put the fire beyond the height it could reach waters on, but a
+    cold answer then says "out of view", not "out"). A fire never seen hot from there
     is never reported out: the goal fails with why, and the central unit tries again or gives it to
     another robot."""
     INPUT_KEYS = ['fire_id']
@@ -177,6 +192,9 @@ class ExtinguishIndoorFire(AgentTask):
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
         self.walls = LegGuard(self)                      # its laser scans (the wall clearance's returns)
+        self.aim_z: Optional[float] = None               # the height held to aim (UAV), None: not steered yet
+        self.watering_z: Optional[float] = None          # the height the watering pose was reached at
+        self.on_jet = True                               # the last sighting's height correction was all sent
 
     def _wall_points(self) -> Optional[np.ndarray]:
         """The laser's returns for the wall clearance; None when it is off or without a fresh scan (said)."""
@@ -215,63 +233,106 @@ class ExtinguishIndoorFire(AgentTask):
         off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
         if off is None:
             return None
-        to = np.array([here[0] + off[0], here[1] + off[1], here[2]])
+        to = np.array([here[0] + off[0], here[1] + off[1], self._held_z(here)])
         a.send_waypoint(to[0], to[1], to[2], yaw)
         a.backend.loginfo_throttle(2.0, f'[{self.name}] a wall nearer than {a.p.min_wall_clearance:.2f} m by '
                                         f'the laser: backing off {math.hypot(off[0], off[1]):.2f} m')
         return to
 
-    def _sighted_bearing(self, since: float, wait: float) -> Optional[tuple]:
-        """(bearing, heading then) of the thermal camera's fire in a detection whose image was taken after
-        `since`, waiting up to `wait` s for one; None without. bearing: rad of the hot spot off the heading
-        the image was taken with (its body-relative position); heading then: that heading (pose_at)."""
+    def _sighted(self, since: float, wait: float) -> Optional[Sighting]:
+        """The thermal camera's fire in a detection whose image was taken after `since`, waiting up to `wait`
+        s for one; None without (or with a non-finite position)."""
         a = self.agent
         end = a.backend.now() + wait
         while True:
             fire, stamp = self.sensed.latest_fire()
             if fire is not None and stamp > since:
-                bearing = math.atan2(fire[1][1], fire[1][0])
-                return (bearing, a.pose_at(stamp)[3]) if math.isfinite(bearing) else None
+                rel = fire[1]
+                bearing = math.atan2(rel[1], rel[0])
+                if not (math.isfinite(bearing) and math.isfinite(rel[2])):
+                    return None
+                then = a.pose_at(stamp)
+                return Sighting(bearing, float(then[3]), float(rel[2]), float(then[2]))
             if a.backend.now() >= end:
                 return None
             self.sleep(0.1)
 
-    def _face_the_heat(self, tries: int = AIM_TRIES) -> Optional[float]:
-        """Turn until the thermal camera's fire is straight ahead (within ~aim_bearing_tolerance); the heading
-        it turned to, None when it did not turn. Why: there is no hole to aim at indoors, and the pose the
-        fire estimate was faced from carries the GNSS error; the jet leaves along the heading (seen under
-        realistic uncertainty: 2 L pumped beside an indoor fire, 18 % of it in).
+    def _height_target(self, seen: Sighting) -> Optional[float]:
+        """The height that puts the hot spot where the jet lands, None when it is there already (within
+        ~aim_height_tolerance) or the robot cannot climb (UGV). Relative to the height the image was taken
+        at, so that it holds for any GNSS height error (a bias moves both alike); each correction at most
+        ~aim_height_step, all within ~aim_height_range of the watering height. Sets on_jet: the whole
+        correction this sighting asks for was sent (else the jet is still off the hot spot)."""
+        a = self.agent
+        if a.ROBOT_TYPE != 'uav' or self.watering_z is None:
+            return None
+        error = seen.rise - a.p.jet_rise
+        if abs(error) < a.p.aim_height_tolerance:
+            self.on_jet = True
+            return None
+        step = max(-a.p.aim_height_step, min(a.p.aim_height_step, error))
+        reach = a.p.aim_height_range
+        target = max(self.watering_z - reach, min(self.watering_z + reach, seen.z + step))
+        self.on_jet = abs(seen.z + error - target) < a.p.aim_height_tolerance
+        held = self._held_z(a.position())
+        return None if abs(target - held) < 1e-3 else target
+
+    def _held_z(self, here) -> float:
+        """The height set-point to hold: the aimed one once steered, else where the robot is."""
+        return float(here[2]) if self.aim_z is None else self.aim_z
+
+    def _face_the_heat(self, yaw: float, tries: int = AIM_TRIES) -> Optional[float]:
+        """Turn (from heading yaw) until the thermal camera's fire is straight ahead (within
+        ~aim_bearing_tolerance) and, for a UAV, climb or sink until it sits where the jet lands
+        (_height_target); the heading it aimed to, None when it did not move. Why: there is no hole to aim
+        at indoors, and the pose the fire estimate was faced from carries the GNSS error; the jet leaves
+        along the heading (seen under realistic uncertainty: 2 L pumped beside an indoor fire, 18 % of it in).
 
         Closed loop: each turn is measured again on an image taken after it (the bearing of a 32-pixel
         image's hot spot is approximate, and one taken while the robot still turned belongs to another
         heading: realistic seed 103, a single turn left the UGV's jet 0.14 m beside the hole, 4 degrees)."""
         a = self.agent
-        turned = None
+        aimed = None
         since = a.backend.now() - 1.0
         for _ in range(tries):
-            seen = self._sighted_bearing(since, AIM_SIGHTING_WAIT)
-            if seen is None or abs(seen[0]) < a.p.aim_bearing_tolerance:
+            seen = self._sighted(since, AIM_SIGHTING_WAIT)
+            if seen is None:
                 break
-            turned = self._turn_to(seen[1] + seen[0])
-            since = a.backend.now()                      # only images of the new heading count
-        return turned
+            turn = abs(seen.bearing) >= a.p.aim_bearing_tolerance
+            z = self._height_target(seen)
+            if not turn and z is None:
+                break
+            if turn:
+                yaw = seen.yaw + seen.bearing
+            if z is not None:
+                self.aim_z = z
+            aimed = self._turn_to(yaw)
+            since = a.backend.now()                      # only images of the new aim count
+        return aimed
 
     def _turn_to(self, yaw: float) -> float:
-        """Turn where it stands to heading yaw (no translation: the robot stays where it sees the fire from)
-        and wait until it points there (at most AIM_TURN_TIME s); returns yaw."""
+        """Turn where it stands to heading yaw, at the held height (no translation: the robot stays where it
+        sees the fire from), and wait until it points there at that height (at most AIM_TURN_TIME s)."""
         a = self.agent
         p = self._turn_in_place(yaw)
-        self.feedback('AIMING', f'turning {math.degrees(wrap_angle(yaw - p[3])):.0f} deg to the hot spot')
+        z = self._held_z(p)
+        self.feedback('AIMING', f'turning {math.degrees(wrap_angle(yaw - p[3])):.0f} deg, {z - p[2]:+.2f} m up '
+                                'to the hot spot')
         end = a.backend.now() + AIM_TURN_TIME
-        while abs(wrap_angle(a.position()[3] - yaw)) > a.p.aim_bearing_tolerance / 2 and a.backend.now() < end:
+        while a.backend.now() < end:
+            here = a.position()
+            if (abs(wrap_angle(here[3] - yaw)) <= a.p.aim_bearing_tolerance / 2
+                    and abs(here[2] - z) <= a.p.aim_height_tolerance / 2 + 0.05):   # + the fix's own noise
+                break
             self.sleep(0.1)
         return yaw
 
     def _turn_in_place(self, yaw: float):
-        """Hold where the robot is now, heading yaw; the pose it was at. No translation: a drive to a GNSS
-        position moves the robot by its GNSS error's drift, off where it sees the fire from."""
+        """Hold where the robot is now (at the held height), heading yaw; the pose it was at. No
+        translation: a drive to a GNSS position moves the robot by its GNSS error's drift, off where it sees
+        the fire from."""
         p = self.agent.position()
-        self.agent.send_waypoint(p[0], p[1], p[2], yaw)
+        self.agent.send_waypoint(p[0], p[1], self._held_z(p), yaw)
         return p
 
     def run(self, ud) -> str:
@@ -280,21 +341,23 @@ class ExtinguishIndoorFire(AgentTask):
             raise TaskError('tank empty')
         fire = np.array(fire_position(a, ud.fire_id))
         self.sensed.clear()                              # a previous run's detections aim nothing
+        self.aim_z, self.watering_z, self.on_jet = None, None, True
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
         pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
+        self.watering_z = float(a.position()[2])
         self.feedback('CHECKING', f'fire {ud.fire_id}: is it in sight of the thermal camera?')
         cold = ColdConfirmation()
         if self._seen_hot(cold, a.p.check_fire_time):
-            turned = self._face_the_heat()
+            turned = self._face_the_heat(yaw)
             if turned is not None:                      # a new heading: seen hot from there, or no water
                 yaw = turned
                 cold = ColdConfirmation()
                 if not self._seen_hot(cold, a.p.check_fire_time):
-                    raise TaskError(f'fire {ud.fire_id} {NOT_SEEN_HOT}: hot before turning to its hot spot, '
+                    raise TaskError(f'fire {ud.fire_id} {NOT_SEEN_HOT}: hot before aiming at its hot spot, '
                                     'cold after; no water spent')
         elif not self._well_localised(ud.fire_id):
             raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
@@ -350,6 +413,8 @@ class ExtinguishIndoorFire(AgentTask):
                                                 f'{a.water_level:.2f} L')
                 self.sleep(0.5)
                 pose[3] = self._keep_aim(pose[3])
+                if self.aim_z is not None:
+                    pose[2] = self.aim_z                         # the watering pose climbs with the aim
                 here = a.position()
                 at_pose = self._at(pose, here)
                 if not self._heading_at(pose, here):
@@ -357,7 +422,7 @@ class ExtinguishIndoorFire(AgentTask):
                 backed = self._keep_off_walls(pose[3])           # last: its set-point is the one held
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
-                watered = flow.update(a.water_level, a.backend.now()) and at_pose
+                watered = flow.update(a.water_level, a.backend.now()) and at_pose and self.on_jet
                 if cold.update(a.fire_detected(), watered):
                     break
         finally:
@@ -372,13 +437,21 @@ class ExtinguishIndoorFire(AgentTask):
 
     def _keep_aim(self, yaw: float) -> float:
         """While pumping: the watering heading, turned onto the hot spot of the latest thermal detection (at
-        most AIM_MAX_AGE s old) when it is ~aim_bearing_tolerance or more off it. Why: a UAV's set-point
-        moves with its GNSS error's drift, and the bearing to the fire with it."""
+        most AIM_MAX_AGE s old) when it is ~aim_bearing_tolerance or more off it, and (UAV) the height
+        steered onto it (_height_target). Why: a UAV's set-point moves with its GNSS error's drift, and the
+        bearing and height of the fire with it."""
         a = self.agent
-        seen = self._sighted_bearing(a.backend.now() - AIM_MAX_AGE, 0.0)
-        if seen is None or abs(seen[0]) < a.p.aim_bearing_tolerance:
+        seen = self._sighted(a.backend.now() - AIM_MAX_AGE, 0.0)
+        if seen is None:
             return yaw
-        yaw = seen[1] + seen[0]
+        turn = abs(seen.bearing) >= a.p.aim_bearing_tolerance
+        z = self._height_target(seen)
+        if not turn and z is None:
+            return yaw
+        if turn:
+            yaw = seen.yaw + seen.bearing
+        if z is not None:
+            self.aim_z = z
         self._turn_in_place(yaw)
         return yaw
 
