@@ -73,7 +73,8 @@ class MissionRecorder:
                                       callback_args=i, queue_size=1) for i in ids]
         self.subs.append(rospy.Subscriber("/central_unit/status", String, self._on_status, queue_size=1))
         self.slam_inputs = SlamInputs(self.rec.slam, self.lock, ids,
-                                      float(rospy.get_param("~map_fetch_period", 30.0)))
+                                      float(rospy.get_param("~map_fetch_period", 30.0)),
+                                      on_truth=self.rec.add_true_pose)
         if FireStateArray is not None:
             self.subs.append(rospy.Subscriber("/sim/fires", FireStateArray, self._on_fires, queue_size=1))
             self.subs.append(rospy.Subscriber("/sim/score", Score, self._on_score, queue_size=1))

@@ -70,8 +70,9 @@ class SlamInputs:
     """
 
     def __init__(self, slam: SlamRecord, lock: threading.Lock, robot_ids: list, fetch_period: float = 30.0,
-                 arena_frame: str = "arena") -> None:
+                 arena_frame: str = "arena", on_truth: Optional[Callable[..., None]] = None) -> None:
         self.slam, self.lock, self.arena_frame = slam, lock, arena_frame
+        self.on_truth = on_truth                           # (robot, t, x, y, z) of every true pose, lock held
         self.grids: dict[str, tuple] = {}                  # robot -> (Grid, frame)
         self.recent: dict[tuple, dict[float, tuple]] = {}  # (robot, "map" | "arena") -> {stamp: (x, y, yaw)}
         self.truth_ids: Optional[list] = None
@@ -141,6 +142,8 @@ class SlamInputs:
                 xyz = (p.position.x, p.position.y, p.position.z)
                 if all(math.isfinite(v) for v in xyz):
                     self.slam.add_truth(rid, t, *xyz)
+                    if self.on_truth is not None:
+                        self.on_truth(rid, t, *xyz)
 
     # ---- maps ------------------------------------------------------------------------------------
     def fetch_maps(self, _event: Any = None) -> None:

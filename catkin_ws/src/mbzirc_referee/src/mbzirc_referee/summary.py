@@ -32,6 +32,37 @@ class FireRecord:
     extinguished_by: Optional[str] = None
 
 
+def _closer(tracks: dict, robot: str, point: tuple, best: float) -> Optional[tuple]:
+    """(distance, closest_approach) when `robot` at point (t, x, y, z) is nearer than best to the latest
+    point of another robot's track (at most 1 s older; one of the two above 0.3 m: two robots parked on
+    the ground are not an approach), else None."""
+    t, xyz = point[0], point[1:]
+    found = None
+    for other, otr in tracks.items():
+        if other != robot and otr and abs(otr[-1][0] - t) <= 1.0 and max(xyz[2], otr[-1][3]) > 0.3:
+            d = math.dist(xyz, otr[-1][1:])
+            if d < best:
+                best = d
+                found = (d, {"robots": sorted([robot, other]), "t": round(t, 1),
+                             "positions": {robot: [round(v, 2) for v in xyz],
+                                           other: [round(v, 2) for v in otr[-1][1:]]}})
+    return found
+
+
+@dataclass
+class ClosestApproach:
+    """The closest approach of two robots over tracks of their latest points (one per robot)."""
+    tracks: dict = field(default_factory=dict)     # robot -> [(t, x, y, z)] (the latest only)
+    min_separation: float = math.inf
+    closest_approach: dict = field(default_factory=dict)
+
+    def add(self, robot: str, point: tuple) -> None:
+        found = _closer(self.tracks, robot, point, self.min_separation)
+        if found is not None:
+            self.min_separation, self.closest_approach = found
+        self.tracks[robot] = [tuple(point)]
+
+
 @dataclass
 class MissionRecord:
     """Everything the report needs, updated as ground truth arrives.
@@ -49,6 +80,9 @@ class MissionRecord:
     crashes: list[str] = field(default_factory=list)
     min_separation: float = math.inf
     closest_approach: dict = field(default_factory=dict)   # who, when and where min_separation happened
+    # the same from the simulator's true poses (add_true_pose): under GNSS error the data_feed poses are
+    # off by a metre each, and two robots resting on pads 2.6 m apart are reported 0.9 m apart
+    truth: "ClosestApproach" = field(default_factory=lambda: ClosestApproach())
     elapsed: float = 0.0
     robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
     slam: SlamRecord = field(default_factory=lambda: SlamRecord(footprints=ARENA.footprints))  # indoor_flights.py
@@ -73,14 +107,13 @@ class MissionRecord:
         if tr and t - tr[-1][0] < min_dt:
             return
         tr.append((t, x, y, z))
-        for other, otr in self.tracks.items():
-            if other != robot and otr and abs(otr[-1][0] - t) <= 1.0 and max(z, otr[-1][3]) > 0.3:
-                d = math.dist((x, y, z), otr[-1][1:])
-                if d < self.min_separation:
-                    self.min_separation = d
-                    self.closest_approach = {"robots": sorted([robot, other]), "t": round(t, 1),
-                                             "positions": {robot: [round(v, 2) for v in (x, y, z)],
-                                                           other: [round(v, 2) for v in otr[-1][1:]]}}
+        found = _closer(self.tracks, robot, (t, x, y, z), self.min_separation)
+        if found is not None:
+            self.min_separation, self.closest_approach = found
+
+    def add_true_pose(self, robot: str, t: float, x: float, y: float, z: float) -> None:
+        """A robot's true position (/sim/robots): the closest approach the summary reports."""
+        self.truth.add(robot, (t, x, y, z))
 
     def nearest_robot(self, p: tuple[float, float, float], kind: str) -> Optional[str]:
         """The robot closest to p now: who put the fire out (blanket robots for ground fires)."""
@@ -123,6 +156,17 @@ class MissionRecord:
         """Every indoor flight on SLAM with its pose error against the truth (empty without SLAM)."""
         return self.slam.flights(self.elapsed, ARENA.floor_of)
 
+    def _separation(self) -> dict:
+        """min_separation_m and closest_approach from the true poses when the simulator gave them (the
+        data_feed ones then as min_reported_separation_m), else from the data_feeds."""
+        reported = round(self.min_separation, 3) if math.isfinite(self.min_separation) else None
+        if not math.isfinite(self.truth.min_separation):
+            return {"min_separation_m": reported, "closest_approach": self.closest_approach or None,
+                    "separation_source": "data_feed"}
+        return {"min_separation_m": round(self.truth.min_separation, 3),
+                "closest_approach": self.truth.closest_approach, "separation_source": "truth",
+                "min_reported_separation_m": reported, "closest_reported_approach": self.closest_approach or None}
+
     def summary(self, wall_time: float, end_reason: str = "", extra: Optional[dict[str, Any]] = None) -> dict:
         """The summary.json object."""
         fires = sorted(self.fires.values(), key=lambda f: (f.kind, f.floor, f.fire_id))
@@ -137,8 +181,7 @@ class MissionRecord:
             "fires_total": len(fires),
             "crashes": list(self.crashes),
             "all_out_time_s": round(max(times), 2) if self.all_out() and times else None,
-            "min_separation_m": round(self.min_separation, 3) if math.isfinite(self.min_separation) else None,
-            "closest_approach": self.closest_approach or None,
+            **self._separation(),
             "end_reason": end_reason,
             "fires": [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "extinguished_by": f.extinguished_by,
                        "t_extinguished": None if f.t_extinguished is None else round(f.t_extinguished, 2),

@@ -86,3 +86,27 @@ def test_a_feed_without_a_pose_is_no_place():
     assert feed_position(f) == (4.0, -4.0, 0.2)
     f.pose.pose.position.y = math.nan
     assert feed_position(f) is None
+
+
+def test_separation_is_judged_on_the_true_poses_when_the_simulator_gives_them():
+    """Realistic seed 108: UAVs 1 and 3 taking off from pads 2.6 m apart, each data_feed off by its GNSS bias
+    (0.6-0.8 m towards the other), were reported 1.28 m apart; the referee's verdict is the truth's."""
+    r = MissionRecord(seed=108, duration=100.0)
+    for k in range(6):
+        t, z = 2.0 + 0.5 * k, 0.2 * k
+        r.add_pose("1", t, -1.76, 2.39, 0.5 + z)        # GNSS: pad (-2.0, 1.65) + bias
+        r.add_pose("3", t, -0.64, 2.77, 0.4 + z)        # GNSS: pad (0.0, 3.3) + bias
+        r.add_true_pose("1", t, -2.0, 1.65, z)
+        r.add_true_pose("3", t, 0.0, 3.3, z)
+    s = r.summary(10.0)
+    assert s["separation_source"] == "truth"
+    assert math.isclose(s["min_separation_m"], math.hypot(2.0, 1.65), abs_tol=1e-3)
+    assert s["closest_approach"]["robots"] == ["1", "3"]
+    assert s["min_reported_separation_m"] < 1.3
+    # two robots on the ground are no approach
+    assert s["closest_approach"]["t"] >= 3.0
+
+
+def test_separation_falls_back_to_the_data_feeds_without_truth():
+    s = _record().summary(10.0)
+    assert s["separation_source"] == "data_feed" and "min_reported_separation_m" not in s
