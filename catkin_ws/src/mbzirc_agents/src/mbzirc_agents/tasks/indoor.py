@@ -277,6 +277,17 @@ class ExtinguishIndoorFire(AgentTask):
         held = self._held_z(a.position())
         return None if abs(target - held) < 1e-3 else target
 
+    def _correct_aim(self, seen: Sighting, yaw: float) -> Optional[float]:
+        """The heading to aim at from sighting `seen` (heading yaw held now), with aim_z set to the height
+        to hold; None when both are on the hot spot already (nothing to send)."""
+        turn = abs(seen.bearing) >= self.agent.p.aim_bearing_tolerance
+        z = self._height_target(seen)
+        if not turn and z is None:
+            return None
+        if z is not None:
+            self.aim_z = z
+        return seen.yaw + seen.bearing if turn else yaw
+
     def _held_z(self, here) -> float:
         """The height set-point to hold: the aimed one once steered, else where the robot is."""
         return float(here[2]) if self.aim_z is None else self.aim_z
@@ -296,17 +307,10 @@ class ExtinguishIndoorFire(AgentTask):
         since = a.backend.now() - 1.0
         for _ in range(tries):
             seen = self._sighted(since, AIM_SIGHTING_WAIT)
-            if seen is None:
+            new_yaw = None if seen is None else self._correct_aim(seen, yaw)
+            if new_yaw is None:
                 break
-            turn = abs(seen.bearing) >= a.p.aim_bearing_tolerance
-            z = self._height_target(seen)
-            if not turn and z is None:
-                break
-            if turn:
-                yaw = seen.yaw + seen.bearing
-            if z is not None:
-                self.aim_z = z
-            aimed = self._turn_to(yaw)
+            aimed = yaw = self._turn_to(new_yaw)
             since = a.backend.now()                      # only images of the new aim count
         return aimed
 
@@ -322,7 +326,7 @@ class ExtinguishIndoorFire(AgentTask):
         while a.backend.now() < end:
             here = a.position()
             if (abs(wrap_angle(here[3] - yaw)) <= a.p.aim_bearing_tolerance / 2
-                    and abs(here[2] - z) <= a.p.aim_height_tolerance / 2 + 0.05):   # + the fix's own noise
+                    and abs(here[2] - z) <= a.p.aim_height_tolerance):   # the fix's own noise: not /2
                 break
             self.sleep(0.1)
         return yaw
@@ -442,18 +446,11 @@ class ExtinguishIndoorFire(AgentTask):
         bearing and height of the fire with it."""
         a = self.agent
         seen = self._sighted(a.backend.now() - AIM_MAX_AGE, 0.0)
-        if seen is None:
+        new_yaw = None if seen is None else self._correct_aim(seen, yaw)
+        if new_yaw is None:
             return yaw
-        turn = abs(seen.bearing) >= a.p.aim_bearing_tolerance
-        z = self._height_target(seen)
-        if not turn and z is None:
-            return yaw
-        if turn:
-            yaw = seen.yaw + seen.bearing
-        if z is not None:
-            self.aim_z = z
-        self._turn_in_place(yaw)
-        return yaw
+        self._turn_in_place(new_yaw)
+        return new_yaw
 
     def _heading_at(self, pose, here) -> bool:
         return abs(wrap_angle(here[3] - pose[3])) <= self.agent.p.yaw_tolerance
