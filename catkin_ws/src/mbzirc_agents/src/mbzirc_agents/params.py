@@ -153,6 +153,15 @@ class AgentParams:
         if problems:
             raise ParamError('; '.join(problems))
         return cls(**good)
+    use_localization: bool = _param(True, 'with no GNSS fix (ual/gnss_status) fly on localization/pose while '
+                                    'localization/source says slam (pose_source.py); false: on the UAL pose always')
+    localization_timeout: float = _param(1.0, 's (sim): an older localization/pose is not valid')
+    localization_pair_gap: float = _param(0.2, 's: a localization/pose is paired with the UAL poses at most this '
+                                          'far from its stamp (the offset between the frames)')
+    pose_source_grace: float = _param(0.5, 's a pose source of none (no fix, no valid localization) must last '
+                                      'before the robot holds and its task fails')
+    pose_offset_rate: float = _param(0.5, 'm/s: the UAL-to-arena offset applied follows the measured one at '
+                                     'most this fast (no jump of the pose when the source switches)')
 
 
 def check_values(values: Mapping[str, Any]) -> Tuple[Dict[str, Any], List[str]]:

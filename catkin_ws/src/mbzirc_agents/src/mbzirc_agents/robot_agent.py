@@ -18,7 +18,8 @@ from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
 from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegionResponse, CheckFire, FreeRegions,
                                   FreeRegionsRequest, GetCostToGoTo, GetCostToGoToResponse, SetObjectStatus,
                                   SetObjectStatusRequest)
-from std_msgs.msg import Bool, Float32, Header
+from sensor_msgs.msg import NavSatStatus
+from std_msgs.msg import Bool, Float32, Header, String
 from mbzirc_arena.boxes import Box, box_text, boxes_overlap, check_point, make_box, swept_box
 from mbzirc_arena.c3 import ARENA
 from mbzirc_ros_utils.liveness import HeartbeatFilter
@@ -32,7 +33,13 @@ from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
+from .pose_source import NONE, PoseSource, PoseSourceConfig
 from .region_yield import STEP_LABEL, step_aside_targets
+
+
+# m: a held go-to set-point is sent to the UAL again once the UAL-to-arena offset moved this far since it was
+# sent (the UAL's dead reckoning drifts a few cm/s indoors; pose_source.py)
+FRAME_RESEND_DISTANCE = 0.1
 
 
 def feed_content(msg: AgentDataFeed) -> tuple:
@@ -52,8 +59,19 @@ class RobotAgent(Agent):
         self.p = AgentParams.from_dict(params)
         self.arena = list(self.p.arena)
         self.state_lock = threading.Lock()
-        self.pose: Optional[np.ndarray] = None          # x, y, z, yaw
+        self.pose: Optional[np.ndarray] = None          # x, y, z, yaw in the arena frame (pose_source.py)
         self.pose_msg: Optional[PoseStamped] = None
+        p = self.p
+        # the UAL's pose or the indoor localization's, and the offset between the UAL's frame and the arena
+        self.pose_source = PoseSource(PoseSourceConfig(p.use_localization, p.localization_timeout,
+                                                       p.pose_source_grace, p.pose_offset_rate,
+                                                       p.localization_pair_gap))
+        self._ual_xyz: Optional[np.ndarray] = None      # the last accepted UAL position (its own frame)
+        # the go-to set-point last sent (arena x, y, z, yaw) and the offset it was sent with; None while the
+        # UAL follows velocities or its own take-off / landing
+        self._set_point_lock = threading.RLock()
+        self._set_point: Optional[tuple] = None
+        self._set_point_offset = np.zeros(2)
         # (stamp s, pose) of the last seconds: detections are placed with the pose at their image's time
         self.pose_history: deque = deque(maxlen=C.POSE_HISTORY_LEN)
         self.pose_doubt_since: Optional[float] = None    # a GNSS jump is doubted since then (backend time)
@@ -84,6 +102,9 @@ class RobotAgent(Agent):
         ifc = self.iface
         ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
         ifc.add_subscriber(None, 'ual/state', State, self._on_state)
+        ifc.add_subscriber(None, 'ual/gnss_status', NavSatStatus, self._on_gnss_status)
+        ifc.add_subscriber(None, 'localization/source', String, self._on_localization_source)
+        ifc.add_subscriber(None, 'localization/pose', PoseStamped, self._on_localization_pose)
         ifc.add_subscriber(None, 'actuators_system/water_level', Float32, self._on_water)
         ifc.add_subscriber(None, 'actuators_system/blanket_attached', Bool, self._on_blanket)
         ifc.add_subscriber(None, '/estimated_objects', ObjectList, self._on_objects)
@@ -110,6 +131,7 @@ class RobotAgent(Agent):
         is in the air (its airspace is still its own: a respawned UAV freed every region it held, mid-air)."""
         super().start()
         self._watchdog_thread = self.backend.start_thread('heartbeat_watchdog', self._watchdog_loop)
+        self.backend.start_thread('set_point_keeper', self._set_point_loop)
 
     def _settle_start(self, xyz: np.ndarray) -> None:
         """At the first pose: choose home and what to do with the regions of a previous run.
@@ -154,19 +176,71 @@ class RobotAgent(Agent):
         if yaw is None or not all(map(math.isfinite, vals)):
             self.backend.logerr_throttle(5.0, 'ual/pose: NaN or invalid orientation, ignored')
             return
-        stamp = msg.header.stamp.to_sec() or self.backend.now()
+        now = self.backend.now()
+        stamp = msg.header.stamp.to_sec() or now
         if self._doubt_jump(np.array([p.x, p.y, p.z])):
             return
         with self.state_lock:
-            self.pose = np.array([p.x, p.y, p.z, yaw])
-            self.pose_msg = msg
+            src = self.pose_source
+            src.on_ual(stamp, p.x, p.y)
+            switched = src.update(now)
+            x, y = src.to_arena(p.x, p.y)
+            self.pose = np.array([x, y, p.z, yaw])
+            self.pose_msg = msg if (x, y) == (p.x, p.y) else self._arena_pose_msg(msg, x, y)
             if self.pose_history and stamp < self.pose_history[-1][0]:
                 self.pose_history.clear()           # time went back (bag loop, sim restart)
             self.pose_history.append((stamp, self.pose))
             first = not self._started_at_pose
             self._started_at_pose = True
+            lost = src.source == NONE
+            why = src.why
+        if switched:
+            (self.backend.logwarn if lost else self.backend.loginfo)(switched)
+        if lost:
+            self._on_pose_lost(why, bool(switched))
         if first:
-            self._settle_start(np.array([p.x, p.y, p.z]))
+            self._settle_start(np.array([x, y, p.z]))
+
+    @staticmethod
+    def _arena_pose_msg(msg: PoseStamped, x: float, y: float) -> PoseStamped:
+        """msg with the arena (x, y) of the pose source (the data_feed's pose)."""
+        out = PoseStamped()
+        out.header = msg.header
+        out.pose.orientation = msg.pose.orientation
+        out.pose.position.x, out.pose.position.y, out.pose.position.z = x, y, msg.pose.position.z
+        return out
+
+    def _on_gnss_status(self, msg: NavSatStatus) -> None:
+        with self.state_lock:
+            self.pose_source.on_gnss(int(msg.status) >= NavSatStatus.STATUS_FIX)
+
+    def _on_localization_source(self, msg: String) -> None:
+        with self.state_lock:
+            self.pose_source.on_localization_source(str(msg.data))
+
+    def _on_localization_pose(self, msg: PoseStamped) -> None:
+        p = msg.pose.position
+        if msg.header.frame_id.lstrip('/') not in ('', C.GLOBAL_FRAME):
+            self.backend.logerr_throttle(5.0, f'localization/pose in frame {msg.header.frame_id!r}, expected '
+                                              f'{C.GLOBAL_FRAME!r}: ignored')
+            return
+        with self.state_lock:
+            problem = self.pose_source.on_localization_pose(msg.header.stamp.to_sec() or self.backend.now(),
+                                                            p.x, p.y)
+        if problem:
+            self.backend.logerr_throttle(5.0, problem)
+
+    def _on_pose_lost(self, why: str, just_now: bool) -> None:
+        """Pose source none (no GNSS fix and no valid localization): hold where the robot is (zero velocity: the
+        UAL holds its own pose), fail the running task with why (the central unit gives the work to another
+        robot or later), and warn every few seconds while it lasts."""
+        self._hold_still()
+        if just_now:
+            task = self.preempt_running(f'no trusted pose ({why}): holding')
+            if task:
+                self.backend.logwarn(f'{task} stopped: no trusted pose ({why})')
+        else:
+            self.backend.logerr_throttle(5.0, f'no trusted pose ({why}): holding')
 
     def _doubt_jump(self, xyz: np.ndarray) -> bool:
         """True when this reported position jumped more than ~pose_jump_max from the last accepted one
@@ -179,13 +253,13 @@ class RobotAgent(Agent):
         send_velocity hold instead, see pose_in_doubt)."""
         now = self.backend.now()
         with self.state_lock:
-            last = None if self.pose is None or now - self.pose_time > 1.0 else self.pose[:3].copy()
+            last = None if self._ual_xyz is None or now - self.pose_time > 1.0 else self._ual_xyz.copy()
         if last is None or float(np.linalg.norm(xyz - last)) <= self.p.pose_jump_max:
             if self.pose_doubt_since is not None:
                 self.backend.logwarn(f'ual/pose: back within {self.p.pose_jump_max:.1f} m of the last pose, '
                                      'moving on')
             self.pose_doubt_since = None
-            self.pose_time = now
+            self.pose_time, self._ual_xyz = now, xyz
             return False
         if self.pose_doubt_since is None:
             self.pose_doubt_since = now
@@ -193,7 +267,7 @@ class RobotAgent(Agent):
             self.backend.logwarn(f'ual/pose: jumped {np.linalg.norm(xyz - last):.1f} m and stayed there for '
                                  f'{self.p.pose_jump_hold:.1f} s: accepted as the new position')
             self.pose_doubt_since = None
-            self.pose_time = now
+            self.pose_time, self._ual_xyz = now, xyz
             return False
         self.backend.logerr_throttle(2.0, f'ual/pose jumped {np.linalg.norm(xyz - last):.1f} m '
                                           f'(> {self.p.pose_jump_max:.1f} m): doubted, holding')
@@ -201,10 +275,13 @@ class RobotAgent(Agent):
         return True
 
     def pose_in_doubt(self) -> bool:
-        """True while a GNSS jump is being doubted (motion commands become a hold)."""
-        return self.pose_doubt_since is not None
+        """True while a GNSS jump is being doubted, or while no pose is trusted (pose source none): motion
+        commands become a hold."""
+        return self.pose_doubt_since is not None or not self.pose_source.valid
 
     def _hold_still(self) -> None:
+        with self._set_point_lock:
+            self._set_point = None
         if self.is_moving_state():
             msg = TwistStamped()
             msg.header.stamp = self._stamp()
@@ -378,14 +455,27 @@ class RobotAgent(Agent):
 
     # ---- motion primitives ----------------------------------------------------------------------------
     def send_waypoint(self, x: float, y: float, z: float, yaw: float) -> None:
-        """ual/go_to_waypoint, not blocking; TaskError when refused. While the pose is in doubt: a hold."""
+        """ual/go_to_waypoint to the arena (x, y, z, yaw), not blocking; TaskError when refused. The UAL flies
+        in its own frame: the target is sent plus the pose source's offset, and again whenever that offset
+        moves (`_set_point_loop`). While the pose is in doubt: a hold."""
         if self.pose_in_doubt():
             self._hold_still()
             return
+        with self._set_point_lock:
+            self._set_point = (float(x), float(y), float(z), float(yaw))
+            self._send_set_point()
+
+    def _send_set_point(self) -> None:
+        """Send the set-point in the UAL's frame (under _set_point_lock: a re-send never overtakes a new one)."""
+        x, y, z, yaw = self._set_point
+        with self.state_lock:
+            offset = self.pose_source.applied.copy()
+            ux, uy = self.pose_source.to_ual(x, y)
+        self._set_point_offset = offset
         req = GoToWaypointRequest()
         req.waypoint.header.frame_id = C.GLOBAL_FRAME
         req.waypoint.header.stamp = self._stamp()
-        req.waypoint.pose.position.x, req.waypoint.pose.position.y, req.waypoint.pose.position.z = x, y, z
+        req.waypoint.pose.position.x, req.waypoint.pose.position.y, req.waypoint.pose.position.z = ux, uy, z
         q = quaternion_from_yaw(yaw)
         o = req.waypoint.pose.orientation
         o.x, o.y, o.z, o.w = q
@@ -394,6 +484,32 @@ class RobotAgent(Agent):
             self.go_to_srv(req)
         except Exception as e:
             raise TaskError(f'ual/go_to_waypoint failed: {e}')
+
+    def keep_set_point(self) -> None:
+        """Send the held set-point again when the UAL-to-arena offset moved FRAME_RESEND_DISTANCE since it was
+        sent (the UAL's drift without GNSS, a source switch): the robot holds or flies to the arena point, not
+        to where the UAL's frame has gone. Forgotten when the UAL no longer flies the agent's go-tos."""
+        with self._set_point_lock:
+            if self._set_point is None:
+                return
+            if not self.is_moving_state():
+                self._set_point = None
+                return
+            if self.pose_in_doubt():
+                return
+            with self.state_lock:
+                moved = float(np.linalg.norm(self.pose_source.applied - self._set_point_offset))
+            if moved >= FRAME_RESEND_DISTANCE:
+                self._send_set_point()
+
+    def _set_point_loop(self) -> None:
+        """keep_set_point at the control rate (its own thread), until shutdown; errors are logged."""
+        while not self.backend.is_shutdown():
+            try:
+                self.keep_set_point()
+            except Exception as e:  # noqa: BLE001 - tried again at the next step
+                self.backend.logerr_throttle(5.0, f'set-point keeper: {e}')
+            self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
 
     def move_to(self, task: AgentTask, target: Sequence[float], yaw: Optional[float], what: str,
                 tolerance: Optional[float] = None, stop_when: Optional[Any] = None) -> bool:
@@ -423,6 +539,7 @@ class RobotAgent(Agent):
                 if self.backend.now() > end:
                     raise TaskError(f'{what}: not there after {timeout:.0f} s ({dxy:.1f} m left)')
                 self.raise_if_crashed(what)
+                self.raise_if_lost(what)
                 task.feedback('MOVING', f'{what}: {math.hypot(dxy, dz):.1f} m to go')
                 self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
         except TaskPreempted:
@@ -433,6 +550,11 @@ class RobotAgent(Agent):
         """TaskError when the UAL says UNINITIALIZED: the robot crashed, no task may go on commanding it."""
         if self.ual_state == C.UAL_UNINITIALIZED:
             raise TaskError(f'{what + ": " if what else ""}UAL state is UNINITIALIZED (crashed?)')
+
+    def raise_if_lost(self, what: str = '') -> None:
+        """TaskError when no pose is trusted (pose source none): the robot holds, the central unit reassigns."""
+        if not self.pose_source.valid:
+            raise TaskError(f'{what + ": " if what else ""}no trusted pose ({self.pose_source.why}): holding')
 
     def set_point_z(self, target: Sequence[float]) -> float:
         """The z a go-to to target is flown to (a UAV's clearance guard may raise it)."""
@@ -457,6 +579,8 @@ class RobotAgent(Agent):
         if self.pose_in_doubt():
             self._hold_still()
             return
+        with self._set_point_lock:
+            self._set_point = None              # the UAL follows velocities now
         msg = TwistStamped()
         msg.header.stamp = self._stamp()
         msg.header.frame_id = C.GLOBAL_FRAME

@@ -1,0 +1,183 @@
+"""PoseSource: where an agent's pose comes from, the UAL's or the indoor localization's, by one rule.
+
+Why: with no GNSS indoors (ual_sim's `gnss.denied_indoors`) the UAL's reported pose dead-reckons and drifts
+(half a metre in 30 s of hovering), while indoor_localization's `localization/pose` (the robot's
+hector_mapping pose anchored by the last GNSS fixes and refined by the building outline) stays within a few
+centimetres. The tasks must then navigate on the latter, and say so when neither can be trusted.
+
+The rule (`choose`, evaluated at every UAL pose):
+- the UAL reports a GNSS fix (`ual/gnss_status` STATUS_FIX, or no status heard yet) -> the UAL pose (`ual`);
+- no fix, and the localization valid (`localization/source` says `slam` and a `localization/pose`, paired
+  with the UAL pose of its stamp, is stamped within ~localization_timeout of now) -> `slam`;
+- neither -> `none`, declared only once it has lasted ~pose_source_grace s (at a window the UAL's status and
+  the localization's source race by a few milliseconds); meanwhile the previous source goes on.
+
+Frames: the UAL flies to its targets in its own pose frame, which indoors is the dead-reckoned one. The agent
+keeps `offset` = UAL pose - arena pose (horizontal; z and yaw are the UAL's in both sources: the
+localization's z is the UAL's, and the UAL's yaw is the compass's, good everywhere, while the UAL's frame is
+not rotated, only shifted by its drift). Its pose is the UAL pose minus the offset, and every target or hold
+it sends the UAL is the arena target plus the offset. The offset is 0 on `ual`, the measured one on `slam`,
+frozen on `none`; the offset applied follows the target one at most at ~pose_offset_rate m/s, so the
+agent's pose does not jump when the source switches (a passage through a window measures its progress on
+it). The UAL's drift moves the measured offset by a few cm/s: the robot agent sends a held set-point again
+when the applied offset moved (robot_agent, FRAME_RESEND_DISTANCE).
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Optional, Tuple
+
+import numpy as np
+
+UAL, SLAM, NONE = 'ual', 'slam', 'none'
+LOCALIZATION_VALID = 'slam'     # indoor_localization's localization/source when its pose is the one to use
+UAL_HISTORY = 90                # UAL poses kept to pair a localization pose with (3 s at ual_sim's 30 Hz)
+
+
+@dataclass
+class PoseSourceConfig:
+    """The agent params of the pose source (params.AgentParams: use_localization, localization_timeout,
+    pose_source_grace, pose_offset_rate, localization_pair_gap)."""
+    use_localization: bool = True
+    localization_timeout: float = 1.0
+    grace: float = 0.5
+    offset_rate: float = 0.5
+    pair_gap: float = 0.2
+
+
+def choose(fix: bool, localization_valid: bool) -> str:
+    """The rule: the UAL pose while it follows GNSS, else the localization's while valid, else none."""
+    if fix:
+        return UAL
+    return SLAM if localization_valid else NONE
+
+
+class PoseSource:
+    """The agent's pose source and the offset between the UAL's frame and the arena. Not thread-safe: the
+    robot agent calls it under its state lock. Times are the backend's (ROS) seconds."""
+
+    def __init__(self, cfg: PoseSourceConfig = PoseSourceConfig()) -> None:
+        self.cfg = cfg
+        self.source = UAL
+        self.why = 'GNSS fix'
+        self.fix = True
+        self.localization_source = ''
+        self.measured: Optional[Tuple[float, np.ndarray]] = None   # (stamp, offset) of the last pairing
+        self.applied = np.zeros(2)
+        self._none_since: Optional[float] = None
+        self._last_update: Optional[float] = None
+        self._ual: deque = deque(maxlen=UAL_HISTORY)                 # (stamp, x, y) of UAL poses
+
+    # ---- inputs -------------------------------------------------------------------------------------------
+    def on_ual(self, stamp: float, x: float, y: float) -> None:
+        if self._ual and stamp < self._ual[-1][0]:
+            self._ual.clear()                 # time went back (sim restart, bag loop)
+        self._ual.append((stamp, x, y))
+
+    def on_gnss(self, fix: bool) -> None:
+        self.fix = bool(fix)
+
+    def on_localization_source(self, text: str) -> None:
+        self.localization_source = str(text)
+
+    def on_localization_pose(self, stamp: float, x: float, y: float) -> str:
+        """A localization pose (arena frame): measures the offset against the UAL pose of its stamp. Returns
+        '' or why it was not used (to be logged, throttled)."""
+        if not all(map(math.isfinite, (stamp, x, y))):
+            return 'localization/pose: NaN or inf, ignored'
+        ual = self.ual_at(stamp)
+        if ual is None:
+            return (f'localization/pose stamped {stamp:.2f}: no UAL pose within {self.cfg.pair_gap:.2f} s of it '
+                    '(too old or from the future), ignored')
+        self.measured = (stamp, ual - np.array([x, y]))
+        return ''
+
+    def ual_at(self, stamp: float) -> Optional[np.ndarray]:
+        """The UAL's (x, y) at stamp, interpolated between two of its poses at most pair_gap apart (the
+        newest one up to pair_gap after it); None when the history does not cover it."""
+        hist, gap = self._ual, self.cfg.pair_gap
+        if not hist or stamp < hist[0][0] - 1e-9:
+            return None
+        if stamp >= hist[-1][0]:
+            return np.array(hist[-1][1:]) if stamp - hist[-1][0] <= gap else None
+        for (t0, x0, y0), (t1, x1, y1) in zip(reversed(list(hist)[:-1]), reversed(hist)):
+            if t0 <= stamp <= t1:
+                if t1 - t0 > gap:
+                    return None
+                w = 0.0 if t1 <= t0 else (stamp - t0) / (t1 - t0)
+                return np.array([x0 + w * (x1 - x0), y0 + w * (y1 - y0)])
+        return None
+
+    # ---- the rule -----------------------------------------------------------------------------------------
+    def localization_valid(self, now: float) -> bool:
+        return (self.cfg.use_localization and self.localization_source == LOCALIZATION_VALID
+                and self.measured is not None and now - self.measured[0] <= self.cfg.localization_timeout)
+
+    def update(self, now: float) -> Optional[str]:
+        """Apply the rule at time now and move the applied offset; returns the log line of a switch, else
+        None."""
+        fix = self.fix or not self.cfg.use_localization
+        wanted = choose(fix, self.localization_valid(now))
+        before = self.source
+        if wanted != NONE:
+            self._none_since = None
+            self.source = wanted
+        else:
+            if self._none_since is None or now < self._none_since:
+                self._none_since = now
+            if now - self._none_since >= self.cfg.grace:
+                self.source = NONE
+        self.why = self._why(now)
+        self._move_offset(now)
+        if self.source == before:
+            return None
+        return (f'pose source {before} -> {self.source} ({self.why}); UAL frame - arena '
+                f'({self.applied[0]:+.2f}, {self.applied[1]:+.2f}) m, towards '
+                f'({self.target_offset()[0]:+.2f}, {self.target_offset()[1]:+.2f}) m')
+
+    def _why(self, now: float) -> str:
+        if self.fix:
+            return 'GNSS fix' if self.cfg.use_localization else 'GNSS fix or not (~use_localization false)'
+        if self.localization_valid(now):
+            return 'no GNSS fix, localization/pose valid'
+        if self.localization_source != LOCALIZATION_VALID:
+            said = self.localization_source or 'nothing'
+            return f'no GNSS fix and localization/source says {said}'
+        if self.measured is None:
+            return 'no GNSS fix and no usable localization/pose'
+        return (f'no GNSS fix and localization/pose {now - self.measured[0]:.1f} s old '
+                f'(> {self.cfg.localization_timeout:.1f} s)')
+
+    def target_offset(self) -> np.ndarray:
+        if self.source == UAL:
+            return np.zeros(2)
+        if self.source == SLAM and self.measured is not None:
+            return self.measured[1]
+        return self.applied                    # none: frozen where it was
+
+    def _move_offset(self, now: float) -> None:
+        dt = 0.0 if self._last_update is None else max(0.0, now - self._last_update)
+        self._last_update = now
+        step = self.target_offset() - self.applied
+        n = float(np.linalg.norm(step))
+        limit = self.cfg.offset_rate * dt
+        self.applied = self.applied + (step if n <= limit else step * (limit / n))
+
+    # ---- frames -------------------------------------------------------------------------------------------
+    @property
+    def valid(self) -> bool:
+        """False while no pose can be trusted (source none): motion commands become holds."""
+        return self.source != NONE
+
+    def to_arena(self, x: float, y: float) -> Tuple[float, float]:
+        """A UAL-frame (x, y) in the arena frame."""
+        return float(x - self.applied[0]), float(y - self.applied[1])
+
+    def to_ual(self, x: float, y: float) -> Tuple[float, float]:
+        """An arena (x, y) in the UAL's frame (what its go-to flies to)."""
+        return float(x + self.applied[0]), float(y + self.applied[1])
+
+
+__all__ = ['PoseSource', 'PoseSourceConfig', 'choose', 'UAL', 'SLAM', 'NONE', 'LOCALIZATION_VALID']
