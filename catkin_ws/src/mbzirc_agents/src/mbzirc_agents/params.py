@@ -67,6 +67,9 @@ class AgentParams:
                                        '(the GNSS landing may miss it)')
     reland_attempts: int = _param(2, 'landings again on the pad before the last ~refill_timeout wait (0: none)')
     reland_height: float = _param(2.0, 'm of the take-off before landing on the pad again')
+    home_landing_offset: float = _param(0.5, "m off its pad's centre a UAV aims its landing, away from the other "
+                                        "UAVs' pads (tasks/uav_motion.landing_spot): about the GNSS error of one "
+                                        'fix, well inside HOME_PAD_RADIUS (1.5 m); 0: the centre')
     facade_holders: List[List[float]] = _param(_points(C.FACADE_HOLDERS), 'x, y, z of the facade fire holders '
                                                'search_facade visits when its goal has no path', lengths=(3,))
     facade_standoff: float = _param(C.FACADE_STANDOFF, 'm in front of a facade fire holder to check it')

@@ -100,3 +100,24 @@ def test_landings_again_are_bounded_then_the_task_fails():
     finally:
         reset.stop = True
         stop_agent(agent, ual, be)
+
+
+def test_the_landing_is_aimed_off_the_pad_away_from_the_neighbours_pads():
+    """Realistic seeds 104-107: UAVs landing on GNSS beside a neighbour's pad (2.6 m away) came down ~1 m
+    from it. Robot 2 (pad (0, 0); pads (-2, 1.65) and (0, 3.3) beside it) now aims ~home_landing_offset
+    off its pad, away from both: with no GNSS error it lands 0.5 m off its centre, each neighbour's pad at
+    least 2.9 m away (2.59 m when landing on the centre), and is refilled all the same."""
+    be = FakeBackend()
+    agent, ual = start_uav(be, speedup=4.0)
+    reset = Reset(be, ual)
+    try:
+        fly_out(be, ual)
+        s = be.servers['go_home_and_refill_action']
+        s.send(GoHomeAndRefillGoal())
+        assert s.wait(400) == 'succeeded', s.result.message
+        assert len(reset.landings) == 1 and abs(reset.landings[0] - 0.5) < 0.15, reset.landings
+        for pad in ((-2.0, 1.65), (0.0, 3.3)):
+            assert np.linalg.norm(ual.pos[:2] - np.array(pad)) >= 2.9, (ual.pos, pad)
+    finally:
+        reset.stop = True
+        stop_agent(agent, ual, be)

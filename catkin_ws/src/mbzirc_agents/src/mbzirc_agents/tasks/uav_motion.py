@@ -12,6 +12,7 @@ from uav_abstraction_layer.srv import Land as LandSrv
 from uav_abstraction_layer.srv import LandRequest, TakeOff as TakeOffSrv, TakeOffRequest
 from mbzirc_arena.boxes import column_box, swept_box
 from mbzirc_arena.buildings import in_footprint, standing_at
+from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
@@ -214,13 +215,42 @@ class Hover(AgentTask):
         return C.SUCCESS
 
 
+def landing_spot(home, other_homes, offset: float) -> tuple:
+    """(x, y) where a UAV lands at home: `offset` m from its pad, away from the neighbouring pads.
+
+    Why: the landing is flown on GNSS, so a UAV truly comes down about its GNSS bias (~0.7 m, a metre at
+    times) off the point it aims at, and so does its neighbour: on pads 2.6 m apart two UAVs landed or
+    landing side by side can truly be ~1 m apart (realistic seeds 104-107, reported 0.9-1.4 m). Aiming
+    each landing away from the others' pads makes the gap between aimed points ~3.5 m instead. The push
+    is the sum of (home - other) / distance^2 over the other pads (the nearest count most); a pad with no
+    neighbour, or pushed from all sides equally, lands on its centre."""
+    hx, hy = float(home[0]), float(home[1])
+    px = py = 0.0
+    for o in other_homes:
+        dx, dy = hx - float(o[0]), hy - float(o[1])
+        d2 = dx * dx + dy * dy
+        if d2 > 1e-6:
+            px, py = px + dx / d2, py + dy / d2
+    n = math.hypot(px, py)
+    if offset <= 0.0 or n < 1e-6:
+        return hx, hy
+    return hx + offset * px / n, hy + offset * py / n
+
+
+def other_uav_homes(agent_id) -> list:
+    """The home pads of the other UAVs (the arena model: known before the trial)."""
+    return [h.position for h in ARENA.homes if h.kind == 'uav' and str(h.robot_id) != str(agent_id)]
+
+
 class GoHomeAndRefill(AgentTask):
     """Fly home at the cruise altitude, land, and wait for the reset (water refilled / new blanket).
 
-    The landing is flown on GNSS, about a metre off the pad, and the reset is given only near the pad: no
-    reset within ~reland_after s -> take off ~reland_height and land on the pad again (the GNSS error has
-    moved since), at most ~reland_attempts times; then the ~refill_timeout wait, and failure (seen:
-    realistic seed 102, the blanket UAV 1.3-1.5 m off its pad waited for a blanket the whole trial).
+    The landing is flown on GNSS, about a metre off the aimed point, and the reset is given only near the
+    pad: no reset within ~reland_after s -> take off ~reland_height and land on the pad again (the GNSS
+    error has moved since), at most ~reland_attempts times; then the ~refill_timeout wait, and failure
+    (seen: realistic seed 102, the blanket UAV 1.3-1.5 m off its pad waited for a blanket the whole trial).
+    The aimed point is ~home_landing_offset m off the pad's centre, away from the other UAVs' pads
+    (landing_spot): the neighbours' GNSS errors then leave them further apart.
     """
 
     def run(self, ud) -> str:
@@ -264,8 +294,9 @@ class GoHomeAndRefill(AgentTask):
         if p[2] < z - 0.2:                    # climb on the spot first: low flight meets parked UAVs
             self.feedback('CLIMBING', f'climbing to the cruise altitude {z:.1f}')
             self.call_task_or_raise('go_to', {'waypoint': ((p[0], p[1], z), None)}, 'climbing')
+        x, y = landing_spot(home, other_uav_homes(a.agent_id), a.p.home_landing_offset)
         self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
-        self.call_task_or_raise('go_to', {'waypoint': ((home[0], home[1], z), None)}, 'going home')
+        self.call_task_or_raise('go_to', {'waypoint': ((x, y, z), None)}, 'going home')
         self.call_task_or_raise('land', {}, 'landing')
 
 
