@@ -86,6 +86,12 @@ class AgentParams:
     ground_search_spacing: float = _param(3.0, 'm between the lawn-mower legs')
     ground_check_time: float = _param(1.5, 's of dwell at each ground-search waypoint (frame filter > 1 s)')
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
+    downward_camera_fov: float = _param(33.0, 'degrees, field of view of the downward thermal camera (the '
+                                        "TeraRanger Evo Thermal 33's datasheet): sets the ground it covers")
+    ground_fire_search_radius: float = _param(2.0, "m around a ground fire's estimate searched with the "
+                                              'downward camera when it does not see the fire from over it '
+                                              '(the GNSS errors of the UAV and of whoever placed the fire)')
+    ground_fire_search_time: float = _param(60.0, 's at most of that search before giving up (blanket kept)')
     entry_depth: float = _param(3.5, 'm flown in through a window, from the entry pose (the central unit\'s '
                                 'is 2 m outside it)')
     laser_openings: bool = _param(True, 'windows and doors are passed guided by the laser (`scan`): centred '

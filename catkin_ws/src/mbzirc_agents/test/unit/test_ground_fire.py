@@ -10,6 +10,7 @@ import pytest
 from mbzirc_comm_objs.msg import (ExtinguishGroundFireGoal, Object, ObjectDetection, ObjectDetectionList,
                                   ObjectList, TakeOffGoal)
 from std_msgs.msg import Bool
+from uav_abstraction_layer.srv import GoToWaypointResponse
 from std_srvs.srv import TriggerResponse
 
 from fake_backend import FakeBackend
@@ -67,10 +68,24 @@ class Gust:
             self.sc.be.clock.sleep(0.02)
 
 
+class Watch:
+    """The UAV's true horizontal distance from `point`, every 0.1 s."""
+
+    def __init__(self, sc, point):
+        self.sc, self.point, self.stop, self.distances = sc, np.asarray(point, float), False, []
+        sc.be.clock.start_thread(self._loop, name='watch')
+
+    def _loop(self):
+        while not self.stop:
+            with self.sc.ual.lock:
+                self.distances.append(math.hypot(*(self.sc.ual.pos[:2] - self.point[:2])))
+            self.sc.be.clock.sleep(0.1)
+
+
 class Scene:
     """The blanket UAV at 4 m with a blanket, one ground fire track ESTIMATE_ERROR from the plate."""
 
-    def __init__(self):
+    def __init__(self, estimate_error=ESTIMATE_ERROR):
         self.be = FakeBackend()
         self.released = []              # true positions of the blanket releases
         self.statuses = []
@@ -84,7 +99,7 @@ class Scene:
         s.send(TakeOffGoal(height=4.0))
         assert s.wait(10) == 'succeeded'
         o = Object(id=5, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_GROUND, status=C.STATUS_ACTIVE, num_updates=50)
-        o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = FIRE + ESTIMATE_ERROR
+        o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = FIRE + np.asarray(estimate_error, float)
         self.be.subs['/estimated_objects'](ObjectList(objects=[o]))
 
     def _release(self, _req):
@@ -106,7 +121,7 @@ class Scene:
 @pytest.fixture
 def scene():
     made = []
-    yield lambda: made.append(Scene()) or made[-1]
+    yield lambda **kw: made.append(Scene(**kw)) or made[-1]
     for sc in made:
         sc.close()
 
@@ -145,3 +160,71 @@ def test_a_fire_the_camera_never_sees_gets_no_blanket(scene):
     assert s.status == 'aborted' and 'never seen' in s.result.message, s.result.message
     assert sc.released == [] and sc.statuses == []
     assert sc.ual.min_flying_z > 3.0            # it never went down blind
+
+
+def test_a_fire_out_of_the_image_over_the_estimate_is_searched_for_and_covered(scene):
+    """The estimate 1.6 m off (both GNSS errors): over it, the camera at 4 m (1.2 m around) does not see the
+    fire. Before: hovering over the estimate until 'never seen', blanket kept (realistic seeds). Now the
+    spiral around the estimate finds it, and the blanket falls where the camera has it under the UAV."""
+    sc = scene(estimate_error=(-1.1, 1.15, 0.0))
+    sc.threads = (DownwardCamera(sc),)
+    s = sc.extinguish()
+    assert s.status == 'succeeded', s.result.message
+    assert len(sc.released) == 1 and offsets(sc)[0] <= COVERS, offsets(sc)
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+
+
+def test_the_search_is_bounded_and_says_why_it_gave_up(scene):
+    """A fire the camera never sees (covered already): the spiral stays within its radius and the search
+    height, and the goal fails naming the radius searched, blanket kept."""
+    sc = scene()
+    watch = Watch(sc, FIRE + ESTIMATE_ERROR)
+    sc.threads = (DownwardCamera(sc, blind=True), watch)
+    s = sc.extinguish()
+    far = watch.distances
+    radius = sc.agent.p.ground_fire_search_radius
+    assert s.status == 'aborted', s.result.message
+    assert f'within {radius:.1f} m of its estimate' in s.result.message, s.result.message
+    assert 'covered already' in s.result.message
+    assert max(far) > 1.0                       # it did search
+    assert max(far) <= math.sqrt(2) * (radius + 0.3)
+    assert sc.released == [] and sc.ual.min_flying_z > 3.0
+
+
+def test_a_failed_climb_back_after_the_release_still_marks_the_fire_out(scene):
+    """The blanket fell, then the climb back fails (the UAL ignores the go-to): the fire is covered and
+    reported EXTINGUISHED all the same. Before: the status was set only after the climb, the fire stayed
+    ACTIVE and the central unit sent the next blanket to it (realistic seed 108: twice 'never seen')."""
+    sc = scene()
+    sc.threads = (DownwardCamera(sc),)
+    release = sc._release
+
+    def release_then_stick(req):
+        sc.be.handlers['ual/go_to_waypoint'] = lambda _r: GoToWaypointResponse()
+        return release(req)
+    sc.be.handlers['actuators_system/release_blanket'] = release_then_stick
+    s = sc.extinguish()
+    assert len(sc.released) == 1
+    assert s.status == 'aborted' and 'climb back' in s.result.message, s.result.message
+    assert sc.statuses == [C.STATUS_EXTINGUISHED]
+
+
+def test_the_spiral_covers_the_radius_without_gaps():
+    from mbzirc_agents.tasks.ground import footprint_half_width, square_spiral
+    half = footprint_half_width(4.0, 33.0)
+    assert half == pytest.approx(4.0 * math.tan(math.radians(16.5)))
+    for radius in (0.5, 2.0, 3.5):
+        pts = square_spiral((10.0, -3.0), half, radius)
+        assert np.allclose(pts[0], (10.0, -3.0))
+        segs = list(zip(pts[:-1], pts[1:]))
+        for ang in np.linspace(0, 2 * math.pi, 72, endpoint=False):
+            for r in np.linspace(0, radius, 9):
+                q = np.array([10.0 + r * math.cos(ang), -3.0 + r * math.sin(ang)])
+                d = min([np.hypot(*(q - pts[0]))] + [_seg_dist(q, a, b) for a, b in segs])
+                assert d <= half + 1e-9, (radius, q)
+
+
+def _seg_dist(q, a, b):
+    ab = b - a
+    t = np.clip(np.dot(q - a, ab) / np.dot(ab, ab), 0.0, 1.0)
+    return float(np.hypot(*(q - (a + t * ab))))

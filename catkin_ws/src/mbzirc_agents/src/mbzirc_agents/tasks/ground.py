@@ -7,17 +7,20 @@ blanket below the release height.
 Why the release is steered by the image and never by the estimate: the estimate is placed in the frame of
 the GNSS fixes of whoever saw the fire, each off by up to about a metre and drifting, while the UAV flies on
 its own fix. The fire's offset in the downward image is relative to the UAV and free of both errors.
+For the same reason the fire may be out of the image when the UAV arrives over the estimate: it then
+searches around it (a square spiral whose legs the camera's footprint covers) before giving up.
 """
 from __future__ import annotations
 
-from typing import Optional
+import math
+from typing import List, Optional
 
 import numpy as np
 from std_srvs.srv import Trigger
 from mbzirc_arena.boxes import column_box, swept_box
 
 from .. import constants as C
-from ..control import GroundFireCentering, body_to_world
+from ..control import GroundFireCentering, body_to_world, saturate
 from ..agent_task import AgentTask, TaskError
 from ..geometry import lawnmower
 from .common import fire_position, parse_fire, parse_path
@@ -28,6 +31,33 @@ SIGHT_MAX_AGE = 0.5     # s: an older downward sighting neither steers the desce
 # m between the UAV and the fire's centre in the downward image at the release: the blanket (the team's own,
 # larger than the plate by more than this on every side) must land over the whole plate
 RELEASE_TOLERANCE = 0.25
+SEARCH_OVERLAP = 0.8    # neighbouring legs of the search spiral are this fraction of the footprint apart
+SEARCH_POINT_REACHED = 0.3   # m from a search point at which the UAV turns to the next
+
+
+def footprint_half_width(height: float, fov_deg: float) -> float:
+    """m of ground on each side of a downward camera at `height` m with a `fov_deg` field of view."""
+    return max(0.0, height) * math.tan(math.radians(fov_deg) / 2.0)
+
+
+def square_spiral(centre, half_width: float, radius: float) -> List[np.ndarray]:
+    """Corners of a square spiral out from centre (centre first) whose swath, `half_width` on each side of
+    every leg, covers the disc of `radius` m around centre without gaps.
+
+    Parallel legs are one ring (SEARCH_OVERLAP x 2 half_width) apart; the spiral stops at the first ring
+    whose swath reaches radius, after closing it (the last leg runs along its side where it started)."""
+    c = np.asarray(centre[:2], dtype=float)
+    if half_width <= 0.0:
+        return [c]
+    ring = SEARCH_OVERLAP * 2.0 * half_width
+    rings = max(0, math.ceil((radius - half_width) / ring))
+    points, here = [c], np.zeros(2)
+    headings = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)]
+    lengths = [k for k in range(1, 2 * rings + 1) for _ in (0, 1)] + ([2 * rings] if rings else [])
+    for i, n in enumerate(lengths):
+        here = here + n * ring * np.asarray(headings[i % 4])
+        points.append(c + here)
+    return points
 
 
 def gen_look_for_ground_fires(goal, agent) -> dict:
@@ -112,13 +142,19 @@ class ExtinguishGroundFire(AgentTask):
         self.feedback('APPROACHING', f'over fire {ud.fire_id}')
         self.call_task_or_raise('go_to', {'waypoint': ((fire[0], fire[1], fire[2] + h), None)})
         half = a.p.hold_half_size
-        a.reserve(self, 'descend', column_box(fire[0], fire[1], fire[2], fire[2] + h + half, half + 1.0))
+        spiral = self._search_spiral(fire)
+        reach = max(float(np.max(np.abs(q - fire[:2]))) for q in spiral)
+        a.reserve(self, 'descend', column_box(fire[0], fire[1], fire[2], fire[2] + h + half,
+                                              half + max(1.0, reach)))
         ctl = GroundFireCentering(release_height=a.p.blanket_release_height, tolerance=RELEASE_TOLERANCE)
         try:
-            self._descend(ctl, fire, ud.fire_id)
+            self._descend(ctl, fire, ud.fire_id, spiral)
             self.feedback('RELEASING', f'releasing the blanket over fire {ud.fire_id}')
             a.trigger(a.iface.add_client('actuators_system/release_blanket', Trigger), 'release_blanket')
             self.wait_for(lambda: not a.blanket_attached, 5.0, 'the blanket to fall')
+            # covered now, whatever the climb back does: a failed climb must not leave the fire ACTIVE (the
+            # central unit sent the next blanket to it: realistic seed 108, twice 'never seen' over it)
+            a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         finally:
             self.feedback('CLIMBING', 'climbing back')
             p = a.position()
@@ -126,29 +162,71 @@ class ExtinguishGroundFire(AgentTask):
                 a.move_to(self, (p[0], p[1], fire[2] + h), None, 'climb back')
             finally:
                 a.free('descend')
-        a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         self.result.update(extinguished=True, message=f'blanket released over fire {ud.fire_id}')
         return C.SUCCESS
 
-    def _descend(self, ctl: GroundFireCentering, fire, fire_id: int) -> None:
+    def _search_spiral(self, fire) -> List[np.ndarray]:
+        """The search points around the estimate: the footprint of the downward camera (its field of view
+        ~downward_camera_fov) at ~ground_search_height covers ~ground_fire_search_radius around it."""
+        p = self.agent.p
+        return square_spiral(fire[:2], footprint_half_width(p.ground_search_height, p.downward_camera_fov),
+                             p.ground_fire_search_radius)
+
+    def _search(self, ctl: GroundFireCentering, fire, fire_id: int, spiral) -> np.ndarray:
+        """Fly the spiral at the search height until the downward camera sees the fire; returns where it
+        put the fire (UAV's own frame). Dwells ~ground_check_time at its first and last point (the
+        detector's frame filter). TaskError ('never seen') when the spiral or ~ground_fire_search_time ends
+        first: the fire is covered already, or its estimate is further off than the radius."""
+        a = self.agent
+        top = fire[2] + a.p.ground_search_height
+        start = a.backend.now()
+        i, reached = 0, None               # the search point flown to; when the current one was reached
+        while True:
+            self.check_preempt()
+            now = a.backend.now()
+            p = a.position()
+            offset = self._sighted_offset(p)
+            if offset is not None:
+                return p[:2] + offset
+            if reached is None and np.hypot(*(spiral[i] - p[:2])) <= SEARCH_POINT_REACHED:
+                reached = now
+            dwell = a.p.ground_check_time if i in (0, len(spiral) - 1) else 0.0
+            if reached is not None and now - reached >= dwell:
+                if i == len(spiral) - 1:
+                    break
+                i, reached = i + 1, None
+            if now - start > a.p.ground_fire_search_time:
+                break
+            v = np.zeros(3)
+            v[:2] = saturate(ctl.gain * (spiral[i] - p[:2]), ctl.vmax)
+            v[2] = float(np.clip(ctl.gain * (top - p[2]), -ctl.descent_speed, ctl.descent_speed))
+            a.send_velocity(v)
+            self.feedback('SEARCHING', f'fire {fire_id} not in the downward image: search point '
+                                       f'{i + 1}/{len(spiral)}, z {p[2]:.1f}')
+            a.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
+        raise TaskError(f'fire {fire_id} never seen by the downward camera within '
+                        f'{a.p.ground_fire_search_radius:.1f} m of its estimate ({len(spiral)} search points, '
+                        f'{a.backend.now() - start:.0f} s): covered already, or the estimate is further off: '
+                        'blanket kept')
+
+    def _descend(self, ctl: GroundFireCentering, fire, fire_id: int, spiral) -> None:
         """Down to the release height centred on the fire in the downward image; returns when a fresh
         sighting has it under the UAV within RELEASE_TOLERANCE at that height.
 
-        Out of sight (never seen yet, or lost: a gust at low height, where the image covers less than a
-        metre, puts the fire out of view) the UAV stops descending and climbs back towards the search height,
-        where the view is widest, over the place it last saw the fire (the estimate before the first
-        sighting). Why not go on towards the estimate: in the UAV's GNSS frame it may be a metre off
-        (realistic seed 103: the blanket dropped beside the fire, which burned on)."""
+        Not seen from over the estimate: the search spiral first (`_search`). Out of sight afterwards
+        (lost: a gust at low height, where the image covers less than a metre, puts the fire out of view)
+        the UAV stops descending and climbs back towards the search height, where the view is widest, over
+        the place it last saw the fire. Why not go on towards the estimate: in the UAV's GNSS frame it may
+        be a metre off (realistic seed 103: the blanket dropped beside the fire, which burned on)."""
         a = self.agent
-        start = a.backend.now()
         top = fire[2] + a.p.ground_search_height
-        seen_xy = None                     # where the camera last put the fire, in the UAV's own frame
+        seen_xy = self._search(ctl, fire, fire_id, spiral)   # where the camera last put the fire (own frame)
+        start = a.backend.now()
         while True:
             self.check_preempt()
             if a.backend.now() - start > a.p.centering_timeout:
-                how = 'never seen' if seen_xy is None else 'not centred'
-                raise TaskError(f'could not centre fire {fire_id} in {a.p.centering_timeout:.0f} s '
-                                f'(downward camera: {how}): blanket kept')
+                raise TaskError(f'could not centre fire {fire_id} in {a.p.centering_timeout:.0f} s after '
+                                'seeing it (downward camera: lost or not centred): blanket kept')
             p = a.position()
             offset = self._sighted_offset(p)
             if offset is not None:
@@ -158,7 +236,7 @@ class ExtinguishGroundFire(AgentTask):
                 v = ctl.velocity(p, seen_xy, fire[2])
                 what = f'{np.hypot(*offset):.2f} m off in the image'
             else:
-                v = ctl.velocity(p, fire[:2] if seen_xy is None else seen_xy, fire[2])
+                v = ctl.velocity(p, seen_xy, fire[2])
                 v[2] = float(np.clip(ctl.gain * (top - p[2]), 0.0, ctl.descent_speed))   # never down blind
                 what = 'out of sight of the downward camera: climbing over where it was'
             a.send_velocity(v)
