@@ -1,6 +1,8 @@
 # The project's commands. Every target first runs the idempotent setup (apt, venv, catkin_make).
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
 #                  UNCERTAINTY=realistic (GNSS error, unknown water and heat, laser dropouts; default ideal)
+#                  INDOOR_SLAM=1 (hector_mapping + the anchored indoor pose on the robots that go indoors)
+#                  GNSS_DENIED_INDOORS=1 (no GNSS inside buildings; turns INDOOR_SLAM on unless given)
 #                  GCS=0 (no web ground station; it is on http://127.0.0.1:8088/ by default)  GCS_PORT=
 #   make replay BAG=results/.../mission.bag   replay a recorded trial on the ground station page  GCS_PORT=
 #                  (without BAG: the page lists the recordings under results/ to pick one)
@@ -20,6 +22,8 @@ GCS ?= 1
 GCS_PORT ?= 8088
 BAG ?=
 UNCERTAINTY ?= ideal
+INDOOR_SLAM ?=
+GNSS_DENIED_INDOORS ?=
 
 .PHONY: setup build mission replay test test-faults bench lint clean
 setup:
@@ -29,7 +33,8 @@ build: setup
 
 mission: setup
 	@bash tools/run_mission.sh SEED=$(SEED) UAVS=$(UAVS) RTF=$(RTF) RECORD=$(RECORD) SUMMARY=$(SUMMARY) \
-	  GCS=$(GCS) GCS_PORT=$(GCS_PORT) UNCERTAINTY=$(UNCERTAINTY)
+	  GCS=$(GCS) GCS_PORT=$(GCS_PORT) UNCERTAINTY=$(UNCERTAINTY) INDOOR_SLAM=$(INDOOR_SLAM) \
+	  GNSS_DENIED_INDOORS=$(GNSS_DENIED_INDOORS)
 
 replay: setup
 	@source env.sh && rosrun mbzirc_ground_station replay $(if $(BAG),"$(BAG)") --port $(GCS_PORT)
