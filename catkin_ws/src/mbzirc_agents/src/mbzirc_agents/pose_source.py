@@ -26,25 +26,15 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
 from typing import Optional, Tuple
 
 import numpy as np
 
+from .params import AgentParams
+
 UAL, SLAM, NONE = 'ual', 'slam', 'none'
 LOCALIZATION_VALID = 'slam'     # indoor_localization's localization/source when its pose is the one to use
 UAL_HISTORY = 90                # UAL poses kept to pair a localization pose with (3 s at ual_sim's 30 Hz)
-
-
-@dataclass
-class PoseSourceConfig:
-    """The agent params of the pose source (params.AgentParams: use_localization, localization_timeout,
-    pose_source_grace, pose_offset_rate, localization_pair_gap)."""
-    use_localization: bool = True
-    localization_timeout: float = 1.0
-    grace: float = 0.5
-    offset_rate: float = 0.5
-    pair_gap: float = 0.2
 
 
 def choose(fix: bool, localization_valid: bool) -> str:
@@ -56,10 +46,12 @@ def choose(fix: bool, localization_valid: bool) -> str:
 
 class PoseSource:
     """The agent's pose source and the offset between the UAL's frame and the arena. Not thread-safe: the
-    robot agent calls it under its state lock. Times are the backend's (ROS) seconds."""
+    robot agent calls it under its state lock. Times are the backend's (ROS) seconds. Its numbers are the
+    agent params use_localization, localization_timeout, localization_pair_gap, pose_source_grace and
+    pose_offset_rate (params.AgentParams)."""
 
-    def __init__(self, cfg: PoseSourceConfig = PoseSourceConfig()) -> None:
-        self.cfg = cfg
+    def __init__(self, p: AgentParams) -> None:
+        self.p = p
         self.source = UAL
         self.why = 'GNSS fix'
         self.fix = True
@@ -89,7 +81,7 @@ class PoseSource:
             return 'localization/pose: NaN or inf, ignored'
         ual = self.ual_at(stamp)
         if ual is None:
-            return (f'localization/pose stamped {stamp:.2f}: no UAL pose within {self.cfg.pair_gap:.2f} s of it '
+            return (f'localization/pose stamped {stamp:.2f}: no UAL pose within {self.p.localization_pair_gap:.2f} s of it '
                     '(too old or from the future), ignored')
         self.measured = (stamp, ual - np.array([x, y]))
         return ''
@@ -97,7 +89,7 @@ class PoseSource:
     def ual_at(self, stamp: float) -> Optional[np.ndarray]:
         """The UAL's (x, y) at stamp, interpolated between two of its poses at most pair_gap apart (the
         newest one up to pair_gap after it); None when the history does not cover it."""
-        hist, gap = self._ual, self.cfg.pair_gap
+        hist, gap = self._ual, self.p.localization_pair_gap
         if not hist or stamp < hist[0][0] - 1e-9:
             return None
         if stamp >= hist[-1][0]:
@@ -112,13 +104,13 @@ class PoseSource:
 
     # ---- the rule -----------------------------------------------------------------------------------------
     def localization_valid(self, now: float) -> bool:
-        return (self.cfg.use_localization and self.localization_source == LOCALIZATION_VALID
-                and self.measured is not None and now - self.measured[0] <= self.cfg.localization_timeout)
+        return (self.p.use_localization and self.localization_source == LOCALIZATION_VALID
+                and self.measured is not None and now - self.measured[0] <= self.p.localization_timeout)
 
     def update(self, now: float) -> Optional[str]:
         """Apply the rule at time now and move the applied offset; returns the log line of a switch, else
         None."""
-        fix = self.fix or not self.cfg.use_localization
+        fix = self.fix or not self.p.use_localization
         wanted = choose(fix, self.localization_valid(now))
         before = self.source
         if wanted != NONE:
@@ -127,7 +119,7 @@ class PoseSource:
         else:
             if self._none_since is None or now < self._none_since:
                 self._none_since = now
-            if now - self._none_since >= self.cfg.grace:
+            if now - self._none_since >= self.p.pose_source_grace:
                 self.source = NONE
         self.why = self._why(now)
         self._move_offset(now)
@@ -139,7 +131,7 @@ class PoseSource:
 
     def _why(self, now: float) -> str:
         if self.fix:
-            return 'GNSS fix' if self.cfg.use_localization else 'GNSS fix or not (~use_localization false)'
+            return 'GNSS fix' if self.p.use_localization else 'GNSS fix or not (~use_localization false)'
         if self.localization_valid(now):
             return 'no GNSS fix, localization/pose valid'
         if self.localization_source != LOCALIZATION_VALID:
@@ -148,7 +140,7 @@ class PoseSource:
         if self.measured is None:
             return 'no GNSS fix and no usable localization/pose'
         return (f'no GNSS fix and localization/pose {now - self.measured[0]:.1f} s old '
-                f'(> {self.cfg.localization_timeout:.1f} s)')
+                f'(> {self.p.localization_timeout:.1f} s)')
 
     def target_offset(self) -> np.ndarray:
         if self.source == UAL:
@@ -162,7 +154,7 @@ class PoseSource:
         self._last_update = now
         step = self.target_offset() - self.applied
         n = float(np.linalg.norm(step))
-        limit = self.cfg.offset_rate * dt
+        limit = self.p.pose_offset_rate * dt
         self.applied = self.applied + (step if n <= limit else step * (limit / n))
 
     # ---- frames -------------------------------------------------------------------------------------------
@@ -180,4 +172,4 @@ class PoseSource:
         return float(x + self.applied[0]), float(y + self.applied[1])
 
 
-__all__ = ['PoseSource', 'PoseSourceConfig', 'choose', 'UAL', 'SLAM', 'NONE', 'LOCALIZATION_VALID']
+__all__ = ['PoseSource', 'choose', 'UAL', 'SLAM', 'NONE', 'LOCALIZATION_VALID']

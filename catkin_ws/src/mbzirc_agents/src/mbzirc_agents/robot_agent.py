@@ -33,7 +33,7 @@ from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
-from .pose_source import NONE, PoseSource, PoseSourceConfig
+from .pose_source import NONE, PoseSource
 from .region_yield import STEP_LABEL, step_aside_targets
 
 
@@ -61,11 +61,8 @@ class RobotAgent(Agent):
         self.state_lock = threading.Lock()
         self.pose: Optional[np.ndarray] = None          # x, y, z, yaw in the arena frame (pose_source.py)
         self.pose_msg: Optional[PoseStamped] = None
-        p = self.p
         # the UAL's pose or the indoor localization's, and the offset between the UAL's frame and the arena
-        self.pose_source = PoseSource(PoseSourceConfig(p.use_localization, p.localization_timeout,
-                                                       p.pose_source_grace, p.pose_offset_rate,
-                                                       p.localization_pair_gap))
+        self.pose_source = PoseSource(self.p)
         self._ual_xyz: Optional[np.ndarray] = None      # the last accepted UAL position (its own frame)
         # the go-to set-point last sent (arena x, y, z, yaw) and the offset it was sent with; None while the
         # UAL follows velocities or its own take-off / landing

@@ -12,13 +12,20 @@ from std_msgs.msg import String
 
 from fake_backend import FakeBackend
 from fake_ual import start_uav, stop_agent
-from mbzirc_agents.pose_source import NONE, SLAM, UAL, PoseSource, PoseSourceConfig, choose
+from mbzirc_agents.params import AgentParams
+from mbzirc_agents.pose_source import NONE, SLAM, UAL, PoseSource, choose
 
 
 # ---- the rule and the offset, no agent ---------------------------------------------------------------------
 def test_the_rule():
     assert choose(True, True) == UAL and choose(True, False) == UAL
     assert choose(False, True) == SLAM and choose(False, False) == NONE
+
+
+def cfg(offset_rate=0.5, grace=0.5, localization_timeout=1.0, use_localization=True):
+    return AgentParams.from_dict({'pose_offset_rate': offset_rate, 'pose_source_grace': grace,
+                                  'localization_timeout': localization_timeout,
+                                  'use_localization': use_localization})
 
 
 def indoors(src, t, ual_xy, loc_xy, source='slam'):
@@ -31,7 +38,7 @@ def indoors(src, t, ual_xy, loc_xy, source='slam'):
 
 
 def test_no_fix_and_a_valid_localization_gives_slam_with_a_log_line_and_the_offset_applied_at_its_rate():
-    src = PoseSource(PoseSourceConfig(offset_rate=0.5))
+    src = PoseSource(cfg(offset_rate=0.5))
     src.on_ual(10.0, 5.0, 5.0)
     assert src.update(10.0) is None and src.source == UAL
     line = indoors(src, 10.1, (5.0, 5.0), (4.4, 5.8))         # the UAL's frame is (+0.6, -0.8) off the arena
@@ -50,7 +57,7 @@ def test_no_fix_and_a_valid_localization_gives_slam_with_a_log_line_and_the_offs
 def test_the_offset_is_measured_against_the_ual_pose_of_the_localization_stamp():
     """The localization pose comes late (hector_mapping's time per scan): paired with the UAL pose of its own
     stamp, not the latest, or a moving robot's offset would be off by its motion since."""
-    src = PoseSource(PoseSourceConfig(offset_rate=100.0))
+    src = PoseSource(cfg(offset_rate=100.0))
     src.update(19.9)
     for k in range(11):                                        # flying at 1 m/s along x, UAL poses at 10 Hz
         src.on_ual(20.0 + 0.1 * k, 0.1 * k, 0.0)
@@ -64,7 +71,7 @@ def test_the_offset_is_measured_against_the_ual_pose_of_the_localization_stamp()
 
 
 def test_none_only_after_the_grace_and_back_to_slam_when_the_localization_returns():
-    src = PoseSource(PoseSourceConfig(grace=0.5, localization_timeout=1.0))
+    src = PoseSource(cfg(grace=0.5, localization_timeout=1.0))
     indoors(src, 1.0, (0.0, 0.0), (0.0, 0.0))
     assert src.source == SLAM
     # the localization stops: stale after 1 s, then none after the 0.5 s grace
@@ -81,7 +88,7 @@ def test_none_only_after_the_grace_and_back_to_slam_when_the_localization_return
 
 def test_a_fix_lost_before_the_localization_says_slam_is_no_none():
     """At a window the UAL's status and indoor_pose's source race: a few ms without either is no loss."""
-    src = PoseSource(PoseSourceConfig(grace=0.5))
+    src = PoseSource(cfg(grace=0.5))
     src.on_ual(1.0, 0.0, 0.0)
     src.update(1.0)
     src.on_gnss(False)
@@ -92,10 +99,10 @@ def test_a_fix_lost_before_the_localization_says_slam_is_no_none():
 
 
 def test_the_localization_saying_none_or_no_localization_at_all_gives_none():
-    src = PoseSource(PoseSourceConfig(grace=0.0))
+    src = PoseSource(cfg(grace=0.0))
     indoors(src, 1.0, (0.0, 0.0), (0.0, 0.0), source='none')
     assert src.source == NONE and 'localization/source says none' in src.why
-    src = PoseSource(PoseSourceConfig(grace=0.0))
+    src = PoseSource(cfg(grace=0.0))
     src.on_gnss(False)
     src.on_ual(1.0, 0.0, 0.0)
     src.update(1.0)
@@ -103,7 +110,7 @@ def test_the_localization_saying_none_or_no_localization_at_all_gives_none():
 
 
 def test_back_outside_the_fix_wins_and_the_offset_glides_back_to_zero():
-    src = PoseSource(PoseSourceConfig(offset_rate=1.0))
+    src = PoseSource(cfg(offset_rate=1.0))
     t = 0.0
     for _ in range(20):
         t += 0.1
@@ -118,7 +125,7 @@ def test_back_outside_the_fix_wins_and_the_offset_glides_back_to_zero():
 
 
 def test_use_localization_false_keeps_the_ual_pose():
-    src = PoseSource(PoseSourceConfig(use_localization=False, grace=0.0))
+    src = PoseSource(cfg(use_localization=False, grace=0.0))
     indoors(src, 1.0, (0.0, 0.0), (1.0, 1.0))
     assert src.source == UAL and src.valid and src.to_arena(3.0, 4.0) == (3.0, 4.0)
 
