@@ -81,8 +81,9 @@ class PoseSource:
             return 'localization/pose: NaN or inf, ignored'
         ual = self.ual_at(stamp)
         if ual is None:
-            return (f'localization/pose stamped {stamp:.2f}: no UAL pose within {self.p.localization_pair_gap:.2f} s of it '
-                    '(too old or from the future), ignored')
+            span = f'{self._ual[0][0]:.2f}-{self._ual[-1][0]:.2f} s' if self._ual else 'none yet'
+            return (f'localization/pose stamped {stamp:.2f} s: no UAL pose within '
+                    f'{self.p.localization_pair_gap:.2f} s of it (UAL poses kept: {span}), ignored')
         self.measured = (stamp, ual - np.array([x, y]))
         return ''
 
