@@ -23,13 +23,9 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
+from mbzirc_arena.yaw import wrap_angle
 
 GNSS, SLAM, NONE = "gnss", "slam", "none"
-
-
-def wrap(a: float) -> float:
-    """Angle in [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass(frozen=True)
@@ -60,13 +56,13 @@ class Anchor:
 
     def apply(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
         c, s = math.cos(self.theta), math.sin(self.theta)
-        return c * x - s * y + self.tx, s * x + c * y + self.ty, wrap(yaw + self.theta)
+        return c * x - s * y + self.tx, s * x + c * y + self.ty, wrap_angle(yaw + self.theta)
 
 
 def compose(outer: Anchor, inner: Anchor) -> Anchor:
     """outer o inner (inner applied first); keeps inner's fit figures."""
     c, s = math.cos(outer.theta), math.sin(outer.theta)
-    return Anchor(wrap(outer.theta + inner.theta), c * inner.tx - s * inner.ty + outer.tx,
+    return Anchor(wrap_angle(outer.theta + inner.theta), c * inner.tx - s * inner.ty + outer.tx,
                   s * inner.tx + c * inner.ty + outer.ty, inner.residual, inner.pairs)
 
 
@@ -108,7 +104,7 @@ class ReportedPoses:
                     return None
                 a = (t - prev[0]) / (p[0] - prev[0])
                 x, y, z = (prev[i] + a * (p[i] - prev[i]) for i in (1, 2, 3))
-                return x, y, z, wrap(prev[4] + a * wrap(p[4] - prev[4]))
+                return x, y, z, wrap_angle(prev[4] + a * wrap_angle(p[4] - prev[4]))
             prev = p
         return None
 
@@ -235,7 +231,7 @@ class IndoorPose:
         """A SLAM pose that slides off in small steps (a mismatch after a doorway) passes the jump test;
         the UAL's heading and its displacement over the last second catch it. Sets `jumped`."""
         p = self.p
-        dyaw = wrap(ayaw - rep[3])
+        dyaw = wrap_angle(ayaw - rep[3])
         if abs(dyaw) > p.max_heading_disagreement:
             self.jumped = True
             self.events.append(f"SLAM pose jumped at t={t:.2f} s: its heading is {dyaw:+.2f} rad off the UAL's")
@@ -259,8 +255,8 @@ class IndoorPose:
         dt = max(t - t0, 0.0)
         p = self.p
         return (math.hypot(x - x0, y - y0) > p.max_speed * dt + p.jump_margin
-                or abs(wrap(yaw - yaw0)) > p.max_yaw_rate * dt + 0.3)
+                or abs(wrap_angle(yaw - yaw0)) > p.max_yaw_rate * dt + 0.3)
 
 
-__all__ = ["GNSS", "SLAM", "NONE", "Params", "Anchor", "compose", "fit_anchor", "ReportedPoses", "Output", "IndoorPose",
-           "wrap"]
+__all__ = ["GNSS", "SLAM", "NONE", "Params", "Anchor", "compose", "fit_anchor", "ReportedPoses", "Output",
+           "IndoorPose"]

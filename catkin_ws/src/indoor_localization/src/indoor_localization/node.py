@@ -17,12 +17,13 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
 from mbzirc_arena.arena import load_arena
+from mbzirc_arena.laser import scan_points
 from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.messages import GLOBAL_FRAME
 from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .anchor import IndoorPose, Params
-from .outline import IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams, outline_faces, scan_points
+from .outline import IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams, outline_faces
 
 SOURCE_CHECK_PERIOD = 0.2    # s of ROS time: how often a silent SLAM pose is noticed
 SOURCE_KEEPALIVE = 1.0       # s: localization/source is sent on change and at least this often
@@ -84,7 +85,8 @@ class OutlineRefinement:
             scan = next((m for st, m in tuple(self.scans) if abs(st - t) < SCAN_STAMP_MATCH), None)
             if scan is not None and math.isfinite(z):
                 self.last = t
-                pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
+                pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, range_min=scan.range_min,
+                                  range_max=scan.range_max)
                 self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset)
                 self._log()
         at = anchor.apply(pose[0], pose[1], 0.0)[:2]

@@ -32,7 +32,9 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .anchor import Anchor, compose, wrap
+from mbzirc_arena.yaw import wrap_angle
+
+from .anchor import Anchor, compose
 
 IDENTITY = Anchor(0.0, 0.0, 0.0)
 COVERAGE_BIN = 0.25          # m: bins along a wall line when measuring how the returns spread along it
@@ -74,15 +76,6 @@ def outline_faces(footprints: Sequence[Sequence[float]]) -> list:
                   Face(k, "south", (x0, y0), (x1, y0), (0.0, -1.0), -y0, top),
                   Face(k, "north", (x0, y1), (x1, y1), (0.0, 1.0), y1, top)]
     return faces
-
-
-def scan_points(ranges, angle_min: float, angle_increment: float, range_min: float = 0.0,
-                range_max: float = math.inf) -> np.ndarray:
-    """(N, 2) returns in the laser frame; NaN, inf and out-of-range beams are dropped."""
-    r = np.asarray(ranges, dtype=float)
-    a = angle_min + angle_increment * np.arange(r.size)
-    ok = np.isfinite(r) & (r >= range_min) & (r <= range_max)
-    return np.column_stack((r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])))
 
 
 def theil_sen(u: np.ndarray, v: np.ndarray, samples: int = 40) -> np.ndarray:
@@ -458,9 +451,9 @@ class CorrectionSmoother:
         lim = self.rate * dt
         if dist > lim:
             dx, dy = dx * lim / dist, dy * lim / dist
-        dth = wrap(target.theta - a.theta)
+        dth = wrap_angle(target.theta - a.theta)
         dth = max(-self.yaw_rate * dt, min(self.yaw_rate * dt, dth))
-        theta = wrap(a.theta + dth)
+        theta = wrap_angle(a.theta + dth)
         c, s = math.cos(theta), math.sin(theta)
         # new(q) = R(theta) (q - at) + (applied(at) + step)
         px, py = ax + dx, ay + dy
@@ -468,5 +461,5 @@ class CorrectionSmoother:
         return self.applied
 
 
-__all__ = ["Face", "outline_faces", "scan_points", "transform", "RefineParams", "WallObservation",
+__all__ = ["Face", "outline_faces", "transform", "RefineParams", "WallObservation",
            "Correction", "OutlineRefiner", "CorrectionSmoother", "IDENTITY", "wrap_half"]

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from indoor_localization.anchor import (GNSS, NONE, SLAM, Anchor, IndoorPose, Params, ReportedPoses,
-                                        fit_anchor, wrap)
+                                        fit_anchor)
+from mbzirc_arena.yaw import wrap_angle
 
 TRUE_ANCHOR = Anchor(theta=0.8, tx=12.0, ty=-3.0)      # arena <- map of the simulated SLAM
 
@@ -16,7 +17,7 @@ def to_map(x, y, yaw):
     a = TRUE_ANCHOR
     c, s = math.cos(a.theta), math.sin(a.theta)
     dx, dy = x - a.tx, y - a.ty
-    return c * dx + s * dy, -s * dx + c * dy, wrap(yaw - a.theta)
+    return c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - a.theta)
 
 
 def truth(t):
@@ -25,7 +26,7 @@ def truth(t):
         return 4.0 + 1.0 * t, 12.5, 0.0
     if t < 30.0:
         a = (t - 10.0) / 20.0 * 2 * math.pi
-        return 14.0 + 2.0 * math.sin(a), 12.5 + 2.0 * (1 - math.cos(a)), wrap(a)
+        return 14.0 + 2.0 * math.sin(a), 12.5 + 2.0 * (1 - math.cos(a)), wrap_angle(a)
     return 14.0 - 1.0 * (t - 30.0), 12.5, math.pi
 
 
@@ -75,7 +76,7 @@ def test_reported_poses_interpolate_across_the_yaw_wrap_and_refuse_gaps():
     r.add(1.1, 1.0, 2.0, 2.0, -math.pi + 0.1)
     x, y, z, yaw = r.at(1.05, 0.2)
     assert (x, y, z) == pytest.approx((0.5, 1.0, 1.5))
-    assert abs(wrap(yaw - math.pi)) < 1e-9
+    assert abs(wrap_angle(yaw - math.pi)) < 1e-9
     assert r.at(1.05, 0.05) is None            # the two poses are too far apart
     assert r.at(1.2, 0.2) is None              # not covered yet
     assert r.at(1.1, 0.2) == (1.0, 2.0, 2.0, -math.pi + 0.1)
@@ -96,7 +97,7 @@ def test_through_the_window_and_out_again():
     assert all(o.source == SLAM for o, _ in inside)
     err = np.array([[o.x - tr[0] - bias[0], o.y - tr[1] - bias[1]] for o, tr in inside])
     assert np.abs(err).max() < 0.05            # the SLAM noise (1 cm) averaged into the anchor, nothing more
-    assert max(abs(wrap(o.yaw - tr[2])) for o, tr in inside) < 0.01
+    assert max(abs(wrap_angle(o.yaw - tr[2])) for o, tr in inside) < 0.01
     assert all(o.z == pytest.approx(7.5) for o, _ in inside)
     events = core.pop_events()
     assert any(e.startswith("GNSS lost: anchor frozen") for e in events)
@@ -196,5 +197,5 @@ def test_a_correction_moves_the_pose_but_not_the_checks_against_dead_reckoning()
     c, s = math.cos(0.1), math.sin(0.1)
     rx, ry = tr[0] + bias[0] - 14.0 - bias[0], tr[1] + bias[1] - 12.5 - bias[1]
     assert (o.x, o.y) == pytest.approx((14.0 + c * rx - s * ry, 12.5 + s * rx + c * ry), abs=0.02)
-    assert wrap(o.yaw - tr[2]) == pytest.approx(0.1, abs=0.01)
+    assert wrap_angle(o.yaw - tr[2]) == pytest.approx(0.1, abs=0.01)
     assert core.refined_anchor().apply(*to_map(*tr))[:2] == pytest.approx((o.x, o.y), abs=1e-9)

@@ -5,9 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from indoor_localization.anchor import Anchor, compose, wrap
+from indoor_localization.anchor import Anchor, compose
 from indoor_localization.outline import (IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams,
-                                         outline_faces, scan_points)
+                                         outline_faces)
+from mbzirc_arena.laser import scan_points
+from mbzirc_arena.yaw import wrap_angle
 
 # A test building of our own (not the simulator's): outline 0-14 x 0-10 m, walls 0.3 m thick, 18 m high
 X0, Y0, X1, Y1, T = 0.0, 0.0, 14.0, 10.0, 0.3
@@ -67,7 +69,7 @@ def to_map(x, y, yaw):
     a = TRUE_ANCHOR
     c, s = math.cos(a.theta), math.sin(a.theta)
     dx, dy = x - a.tx, y - a.ty
-    return c * dx + s * dy, -s * dx + c * dy, wrap(yaw - a.theta)
+    return c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - a.theta)
 
 
 def anchor_with_error(shift, dyaw, about=(2.0, 5.0)):
@@ -89,7 +91,7 @@ def pose_error(refiner, anchor, x, y, yaw):
     """(dx, dy, dyaw) of the refined pose against the truth."""
     refined = compose(refiner.correction.transform, anchor)
     ex, ey, eyaw = refined.apply(*to_map(x, y, yaw))
-    return ex - x, ey - y, wrap(eyaw - yaw)
+    return ex - x, ey - y, wrap_angle(eyaw - yaw)
 
 
 # in front of the west window (outside), in through it, round the west rooms, through the doorway, the east room

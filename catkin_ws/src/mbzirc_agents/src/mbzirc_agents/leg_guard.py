@@ -21,7 +21,8 @@ Rules:
   spot); returns beside or behind the robot never block (a door frame it passes, the wall it came through);
 - without a fresh scan the leg goes on (a throttled error says so): the guard adds a check, it is not
   what moves the robot.
-Pure geometry here (no ROS): `scan_points`, `corridor_distances`, `blocking_distance`; `LegGuard` is a
+Pure geometry here (no ROS): `corridor_distances`, `blocking_distance` (the scan's returns: mbzirc_arena's
+`laser.scan_points` with keep_near, REP 117); `LegGuard` is a
 task's use of it (its scan subscription and the check passed to `RobotAgent.move_to`'s stop_when).
 """
 from __future__ import annotations
@@ -30,24 +31,13 @@ import math
 from typing import Any, Optional, Sequence, Tuple
 
 import numpy as np
+from mbzirc_arena.laser import scan_points
 from sensor_msgs.msg import LaserScan
 
 from . import constants as C
 from .agent_task import TaskError
 
 MIN_BEAMS = 2              # returns in the corridor that make it blocked (one stray beam does not)
-
-
-def scan_points(ranges: Sequence[float], angle_min: float, angle_increment: float, pose: Sequence[float],
-                range_min: float = 0.0, range_max: float = math.inf) -> np.ndarray:
-    """(N, 2) arena x, y of the scan's returns, the laser at pose (x, y, z, yaw) of base_link: -inf is a
-    return at range_min, NaN, +inf and ranges beyond range_max are no return."""
-    r = np.asarray(ranges, dtype=float)
-    r = np.where(r == -math.inf, float(range_min), r)
-    ok = np.isfinite(r) & (r >= 0.0) & (r <= range_max)
-    a = float(pose[3]) + float(angle_min) + float(angle_increment) * np.arange(r.size)
-    r, a = r[ok], a[ok]
-    return np.column_stack((pose[0] + r * np.cos(a), pose[1] + r * np.sin(a)))
 
 
 def corridor_distances(points: np.ndarray, origin: Sequence[float], direction: Sequence[float],
@@ -123,7 +113,7 @@ class LegGuard:
             return None
         msg, then = fresh
         return scan_points(msg.ranges, msg.angle_min, msg.angle_increment, then, msg.range_min,
-                           msg.range_max if msg.range_max > 0 else math.inf)
+                           msg.range_max if msg.range_max > 0 else math.inf, keep_near=True)
 
     def stop_when(self, target: Sequence[float], tolerance: float):
         """A stop_when for RobotAgent.move_to on the straight leg to target: True (and `reason` set) when the
@@ -161,4 +151,4 @@ class LegGuard:
             raise TaskError(f'{what}: {self.reason}')
 
 
-__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'scan_points']
+__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances']

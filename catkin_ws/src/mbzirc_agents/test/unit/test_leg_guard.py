@@ -10,7 +10,8 @@ from mbzirc_comm_objs.msg import SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from laser_world import ANGLE_MIN, BEAMS, INC, cast, wall_boxes
-from mbzirc_agents.leg_guard import blocking_distance, corridor_distances, scan_points
+from mbzirc_agents.leg_guard import blocking_distance, corridor_distances
+from mbzirc_arena.laser import scan_points
 from test_passage import UAV_R, WALL_Y, enter, pose, ugv, uav  # noqa: F401 - fixtures: a UGV, a UAV
 
 UGV_R = 0.6                                   # ual_sim's radius: what the tests' true tracks must keep off
@@ -21,7 +22,7 @@ HALF, STOP = 0.9, 1.1                         # the UGV's guard (ugv_agent.UGV_D
 def points_seen(x, y, yaw, boxes):
     """The returns a noiseless laser at (x, y, yaw) gets from boxes, in the arena frame."""
     r = cast((x, y), yaw, boxes)
-    return scan_points(r, ANGLE_MIN, INC, (x, y, 0.0, yaw), 0.15, 25.0)
+    return scan_points(r, ANGLE_MIN, INC, (x, y, 0.0, yaw), 0.15, 25.0, keep_near=True)
 
 
 # ---- geometry ----------------------------------------------------------------------------------------------
@@ -50,11 +51,11 @@ def test_a_leg_through_a_doorway_is_not_blocked_by_its_frame():
 def test_one_stray_return_does_not_block_but_too_close_ones_do():
     r = np.full(BEAMS, np.inf)
     r[BEAMS // 2] = 0.5                                          # straight ahead (index 360: the front)
-    pts = scan_points(r, ANGLE_MIN, INC, (0.0, 0.0, 0.0, 0.0), 0.15)
+    pts = scan_points(r, ANGLE_MIN, INC, (0.0, 0.0, 0.0, 0.0), 0.15, keep_near=True)
     assert blocking_distance(pts, (0, 0), (3, 0), HALF, STOP, 0.4) is None
     r[BEAMS // 2 - 2: BEAMS // 2 + 3] = -np.inf                  # REP 117: closer than range_min
     r[BEAMS // 2 + 5] = np.nan
-    pts = scan_points(r, ANGLE_MIN, INC, (0.0, 0.0, 0.0, 0.0), 0.15)
+    pts = scan_points(r, ANGLE_MIN, INC, (0.0, 0.0, 0.0, 0.0), 0.15, keep_near=True)
     assert blocking_distance(pts, (0, 0), (3, 0), HALF, STOP, 0.4) == pytest.approx(0.15, abs=0.01)
 
 

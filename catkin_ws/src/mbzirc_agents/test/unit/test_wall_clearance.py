@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from laser_world import ANGLE_MIN, INC, LaserScene, cast
-from mbzirc_agents.leg_guard import scan_points
+from mbzirc_arena.laser import scan_points
 from mbzirc_agents.wall_clearance import back_off, stop_short, wall_ahead
 from test_indoor_water import FIRE, scenes  # noqa: F401 - fixture: a UAV and its fire
 from test_leg_guard import Closest
@@ -17,7 +17,7 @@ MIN_CLEARANCE = 1.0                             # ~min_wall_clearance's default
 
 
 def seen(x, y, yaw, boxes):
-    return scan_points(cast((x, y), yaw, boxes), ANGLE_MIN, INC, (x, y, 0.0, yaw))
+    return scan_points(cast((x, y), yaw, boxes), ANGLE_MIN, INC, (x, y, 0.0, yaw), keep_near=True)
 
 
 def test_the_wall_ahead_is_measured_along_the_corridor():
