@@ -182,7 +182,7 @@ class OpeningPassage:
             GNSS error may have put it nearer than planned); gain: 1/s; lateral_vmax: m/s sideways (and
             backing off); speed: m/s forward through; tolerance: m off the opening's middle that counts as
             centred. Through, forward motion stops while the robot is further off the middle than the room
-            the opening leaves it (`through`'s room), and never before twice the tolerance.
+            the opening leaves it (`through`'s room).
     """
     standoff: float = 1.0
     gain: float = 1.0
@@ -199,16 +199,19 @@ class OpeningPassage:
         vx = self.gain * min(0.0, distance - self.standoff)
         return saturate(np.array([vx, self.gain * lateral]), self.lateral_vmax)
 
-    def through(self, lateral: Optional[float], room: Optional[float] = None) -> np.ndarray:
-        """Forward at `speed`, sideways onto the middle when it is seen (None: straight on). Forward only
-        while |lateral| <= max(room, 2 x tolerance): room (m) is how far off its middle the opening lets the
-        robot be (its half width less the distance the robot keeps from returns); a robot swinging a
-        little about the middle of a wide opening still goes on."""
+    def through(self, lateral: Optional[float], room: Optional[float] = None,
+                speed: Optional[float] = None) -> np.ndarray:
+        """Forward at `speed` (default: the passage's), sideways onto the middle when it is seen (None:
+        straight on). Forward only while |lateral| <= room: room (m) is how far off its middle the opening
+        lets the robot be (passage.py: its half width less the robot's frame and a margin); unknown room
+        (None, NaN): twice the tolerance. Never forward when off by more than the room, however small the
+        room (a narrow opening: the frame would meet its edge)."""
+        speed = self.speed if speed is None else speed
         if lateral is None or not math.isfinite(lateral):
-            return np.array([self.speed, 0.0])
+            return np.array([speed, 0.0])
         vy = float(np.clip(self.gain * lateral, -self.lateral_vmax, self.lateral_vmax))
-        allowed = 2.0 * self.tolerance if room is None or not math.isfinite(room) else max(room, 2.0 * self.tolerance)
-        vx = self.speed if abs(lateral) <= allowed else 0.0
+        allowed = 2.0 * self.tolerance if room is None or not math.isfinite(room) else room
+        vx = speed if abs(lateral) <= allowed else 0.0
         return np.array([vx, vy])
 
 

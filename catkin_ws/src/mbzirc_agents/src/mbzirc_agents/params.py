@@ -101,7 +101,16 @@ class AgentParams:
     opening_width_tolerance: float = _param(0.4, 'm: an opening seen this much narrower or wider is not it')
     opening_standoff: float = _param(1.0, 'm from the wall kept at least while centring on an opening')
     opening_tolerance: float = _param(0.12, "m off the opening's middle that counts as centred")
-    opening_speed: float = _param(0.4, 'm/s through an opening')
+    opening_speed: float = _param(0.4, 'm/s towards an opening (centred on it) and backing out of it')
+    opening_pass_speed: float = _param(0.8, "m/s across the opening's wall (the robot's frame within reach "
+                                       'of its edges): brisk, so that gusts have little time to push it aside')
+    opening_lateral_gain: float = _param(2.5, "1/s: sideways velocity per m off the opening's middle (centring "
+                                         'and going through)')
+    opening_lateral_vmax: float = _param(1.0, "m/s: at most sideways onto the opening's middle (and backing off)")
+    frame_radius: float = _param(0.4, "m: the robot's own half size across (UAV frame with its propellers; "
+                                 "UGV chassis): what must clear an opening's edges")
+    opening_pass_margin: float = _param(0.25, "m: the robot's frame goes into the opening's wall only this much "
+                                        'clear of its edges (what a gust may push it while it crosses)')
     opening_timeout: float = _param(20.0, 's to find and centre on an opening, and without progress through it, '
                                           'before giving up (holding; backing out when in it)')
     opening_jump_max: float = _param(0.5, "m the opening's middle may move between two scans (beyond the "

@@ -20,7 +20,7 @@ UGV_SUB_TASKS = {'go_to': (ugv.UgvGoTo, {}), 'move': (ugv.UgvGoTo, {'straight': 
 
 # The UGV's defaults where they differ from a UAV's (params.AgentParams).
 UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0,
-                'opening_keep_off': 0.9,   # its 0.6 m radius in the 2.5 m door
+                'opening_keep_off': 0.9, 'frame_radius': 0.6,   # its 0.6 m radius in the 2.5 m door
                 'leg_guard_half_width': 0.9, 'leg_guard_stop_distance': 1.1,   # the same radius + margins
                 'wall_clearance': False}   # parked, it does not drift; a back-off aside is a manoeuvre for it
 

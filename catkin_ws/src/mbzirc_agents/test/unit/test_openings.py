@@ -144,7 +144,9 @@ def test_passage_control():
     assert ctl.through(0.3)[0] == 0.0                                  # off more than twice the tolerance
     assert ctl.through(0.3, room=0.4)[0] == 0.4                        # but within the opening's room
     assert ctl.through(0.45, room=0.4)[0] == 0.0
-    assert ctl.through(0.2, room=0.1)[0] == 0.4                        # never less than twice the tolerance
+    assert ctl.through(0.2, room=0.1)[0] == 0.0                        # a narrow opening: the frame at its edge
+    assert ctl.through(0.05, room=0.1)[0] == 0.4
+    assert ctl.through(0.05, room=0.1, speed=0.8)[0] == 0.8            # the crossing's own speed
     assert ctl.through(0.2, room=float('nan'))[0] == 0.4
 
 

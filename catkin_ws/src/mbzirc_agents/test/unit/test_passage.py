@@ -34,16 +34,16 @@ def pose(x, y, z, yaw):
 class Track:
     """The robot's true x each time its true y is within the wall band (its radius around the wall),
     within 4 m of the opening (not on the way around the building's corner); axis=0: a wall across x
-    (the roles of x and y swapped)."""
+    (the roles of x and y swapped); only while when()."""
 
-    def __init__(self, be, ual, band, radius, x, axis=1):
+    def __init__(self, be, ual, band, radius, x, axis=1, when=lambda: True):
         self.xs, self.zs, self.stop = [], [], False
         lo, hi = band[0] - radius, band[1] + radius
         along = 1 - axis                            # the wall runs along the other axis
 
         def loop():
             while not self.stop:
-                if lo <= ual.pos[axis] <= hi and abs(ual.pos[along] - x) < 4.0:
+                if lo <= ual.pos[axis] <= hi and abs(ual.pos[along] - x) < 4.0 and when():
                     self.xs.append(float(ual.pos[along]))
                     self.zs.append(float(ual.pos[2]))
                 be.clock.sleep(0.02)
@@ -171,6 +171,125 @@ def wind_while_passing(agent, ual, be, scene, velocity, where=lambda pos: True):
                     ual.pos = ual.pos + w * 0.02
             be.clock.sleep(0.02)
     be.clock.start_thread(blow, name='wind')
+
+
+def gusts_near_the_wall(agent, ual, be, scene, std, seed, tau=2.0, hold_gain=2.0):
+    """Gusts as ual_sim blows them near the tower's first floor (robot.py `_wind`), here with the test's own
+    numbers: an Ornstein-Uhlenbeck horizontal gust velocity (std m/s, correlation tau s) that the UAV's own
+    position hold fights (its error e' = gust - hold_gain e), only the change of that error moving the UAV,
+    at 50 Hz of sim time while the UAV passes the window (finding, centring on it, through, backing out: the
+    fake UAL's flight to the entry pose goes around the building without a wall to hit)."""
+    rng = np.random.default_rng(seed)
+    wind, err = np.zeros(2), np.zeros(2)
+    dt = 0.02
+    a = math.exp(-dt / tau)
+
+    def blow():
+        nonlocal wind, err
+        while not scene.stop:
+            if agent.active_sub_state in PASSAGE_STATES:
+                wind = a * wind + math.sqrt(1.0 - a * a) * std * rng.standard_normal(2)
+            else:
+                wind = np.zeros(2)
+            prev = err.copy()
+            err = err + (wind - hold_gain * err) * dt
+            with ual.lock:
+                ual.pos = ual.pos + np.array([err[0] - prev[0], err[1] - prev[1], 0.0])
+            be.clock.sleep(dt)
+    be.clock.start_thread(blow, name='gusts')
+
+
+PASSAGE_STATES = ('FINDING', 'CENTERING', 'PASSING', 'HOLDING', 'BACKING_OUT')
+
+
+def crossing_time(agent, be, ual, band, stop):
+    """Sim seconds the UAV's true y spends within band (the wall's thickness and its radius each side)
+    while passing."""
+    spent = [0.0]
+
+    def watch():
+        while not stop():
+            if band[0] <= ual.pos[1] <= band[1] and agent.active_sub_state in PASSAGE_STATES:
+                spent[0] += 0.02
+            be.clock.sleep(0.02)
+    be.clock.start_thread(watch, name='crossing')
+    return spent
+
+
+@pytest.mark.parametrize('seed', range(1, 9))
+def test_gusts_stronger_than_the_simulators_push_no_uav_onto_a_narrow_windows_edge(uav, seed):
+    """Realistic seed 103: gusts near the first floor pushed a UAV leaving by facade D's window 0.7 m off the
+    middle onto the window's edge: it crawled through at 0.3 m/s (forward stopping whenever pushed off the
+    middle) and its sideways correction (0.4 m/s at most) lost to the gust. Here harder than ual_sim's
+    default: gusts of 1.0 m/s std (ual_sim: 0.6) and a window 1.6 m wide (the arena model's 2 m less 0.4;
+    the laser told to look for that): the UAV's true track crosses the wall inside the window, its radius
+    at least 5 cm clear of the edges, whatever the gusts; when they never let it in, it fails outside the
+    wall. Before: in one of these 8 gust draws (seed 1) the UAV truly touched the edge."""
+    import dataclasses
+    from mbzirc_arena.c3 import ARENA
+    agent, ual, be, scene = uav
+    agent.p.opening_width = 1.6
+    narrow = [dataclasses.replace(o, width=1.6) for o in ARENA.openings]
+    scene.boxes = lambda z: wall_boxes(z, shift=(-1.0, 0.0), openings=narrow)
+    gusts_near_the_wall(agent, ual, be, scene, std=1.0, seed=seed)
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X, when=lambda: agent.active_sub_state in PASSAGE_STATES)
+    s, status = enter(be, timeout=200)
+    true_x = WINDOW_X - 1.0
+    if status == 'succeeded':
+        assert track.within(true_x - 0.8 + UAV_R + 0.05, true_x + 0.8 - UAV_R - 0.05), (min(track.xs),
+                                                                                        max(track.xs))
+    else:
+        assert not track.xs or track.within(true_x - 0.8 + UAV_R, true_x + 0.8 - UAV_R), track.xs
+        assert ual.pos[1] > WALL_Y[1] + UAV_R, f'failed in the wall: {ual.pos} ({s.result.message})'
+
+
+def test_a_uav_pushed_aside_before_the_wall_holds_there_until_centred(uav):
+    """A steady 1 m/s wind along the wall while the UAV is within 1.2 m of the window's face: held about
+    0.4 m off the middle, more than a 2 m window lets its frame go in with ~opening_pass_margin (0.35 m),
+    it stops before the wall (never into it that far off) and goes through once the wind drops (after 4 s),
+    its true track inside the window by its radius and 0.25 m more."""
+    agent, ual, be, scene = uav
+    gust = {'on': None}
+
+    def near_the_face(pos):
+        now = be.clock.now()
+        if pos[1] < WALL_Y[1] + 1.2 and gust['on'] is None:
+            gust['on'] = now
+        return gust['on'] is not None and now - gust['on'] < 4.0
+    wind_while_passing(agent, ual, be, scene, (1.0, 0.0, 0.0), where=near_the_face)
+    track = enter_inside_the_window(be, ual)
+    true_x = WINDOW_X - 1.0
+    assert track.within(true_x - 0.35 - 0.05, true_x + 0.35 + 0.05), (min(track.xs), max(track.xs))
+    assert any('holding before the wall' in m for m in be.infos), be.infos
+
+
+def test_a_gust_in_the_wall_is_outrun_and_outpushed(uav):
+    """A sudden 1 m/s wind along the wall as soon as the UAV's frame is in the wall's reach, for 1.5 s (what
+    ual_sim's gusts do now and then): before, the UAV corrected at 0.4 m/s at most, crawled on at 0.4 m/s
+    and stopped whenever 0.4 m off, and was pushed onto the edge; now it pushes back at up to
+    ~opening_lateral_vmax and crosses at ~opening_pass_speed: its true track stays inside the window by its
+    radius."""
+    agent, ual, be, scene = uav
+    gust = {'on': None}
+
+    def in_the_wall(pos):
+        now = be.clock.now()
+        if pos[1] < WALL_Y[1] + UAV_R and gust['on'] is None:
+            gust['on'] = now
+        return gust['on'] is not None and now - gust['on'] < 1.5
+    wind_while_passing(agent, ual, be, scene, (1.0, 0.0, 0.0), where=in_the_wall)
+    enter_inside_the_window(be, ual)
+
+
+def test_the_uav_crosses_a_windows_wall_briskly(uav):
+    """Not crawling through: the wall (0.2 m thick) and the UAV's radius each side, 0.9 m, crossed in under
+    1.6 s (at the old 0.4 m/s it took 2.3 s and more, every second of it exposed to gusts)."""
+    agent, ual, be, scene = uav
+    done = []
+    spent = crossing_time(agent, be, ual, (WALL_Y[0] - UAV_R, WALL_Y[1] + UAV_R), lambda: bool(done) or scene.stop)
+    enter_inside_the_window(be, ual)
+    done.append(True)
+    assert 0.0 < spent[0] < 1.6, spent[0]
 
 
 def test_a_crosswind_in_the_window_does_not_stall_the_uav(uav):

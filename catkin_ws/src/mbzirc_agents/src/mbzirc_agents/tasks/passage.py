@@ -11,6 +11,11 @@ was taken (more so on a loaded machine, where the task loop and the scan callbac
 scan's own frame then overshoots, the robot swings across the opening's middle and, forward motion being
 allowed only near the middle, crawls (seen: a window not passed in 29 s).
 
+Gusts (near the tower's first floor they push a UAV tenths of a metre about): the robot goes into the
+wall only centred enough that its frame (`~frame_radius`) clears the sensed edges by `~opening_pass_margin`,
+crosses it briskly (`~opening_pass_speed`) held hard to the middle (`~opening_lateral_gain`, up to
+`~opening_lateral_vmax`), and never goes forward with its frame over an edge (`_pass_velocity`).
+
 Safety: the laser blind (every beam NaN) or silent -> the robot holds; an opening not found and centred in
 `~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
 robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
@@ -28,6 +33,7 @@ from sensor_msgs.msg import LaserScan
 from mbzirc_arena.boxes import swept_box
 from mbzirc_arena.buildings import in_footprint, standing_at
 from mbzirc_arena.c3 import ARENA
+from mbzirc_arena.yaw import wrap_angle
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
@@ -93,6 +99,24 @@ def crosses_outline(a, b) -> bool:
     return in_footprint(a, standing_at(a, C.BUILDINGS)) != in_footprint(b, standing_at(b, C.BUILDINGS))
 
 
+class _Crossing:
+    """A passage's crossing of its opening's wall: whether the robot went in, and the worst seen meanwhile
+    (m off the middle; m the frame cleared the edges by, as sensed) for the log."""
+
+    def __init__(self) -> None:
+        self.started = False
+        self.holding = False                 # stopped before the wall, off the middle
+        self.worst: Optional[float] = None
+        self.least_clear = math.inf
+
+    def record(self, lateral: Optional[float], edge_room: Optional[float]) -> None:
+        if lateral is None:
+            return
+        self.worst = abs(lateral) if self.worst is None else max(self.worst, abs(lateral))
+        if edge_room is not None:
+            self.least_clear = min(self.least_clear, edge_room - abs(lateral))
+
+
 class LaserPassage:
     """Passage through an opening for a task: keeps the latest scan while the task runs.
 
@@ -149,7 +173,7 @@ class LaserPassage:
             return np.zeros(2), 0.0
         then, now = scan[2], self.agent.position()
         d = world_to_body((now[0] - then[0], now[1] - then[1], 0.0), then[3])
-        return np.array([d[0], d[1]]), math.remainder(now[3] - then[3], 2 * math.pi)
+        return np.array([d[0], d[1]]), wrap_angle(now[3] - then[3])
 
     def _as_now(self, msg: Any, x: float, y: float) -> Tuple[float, float]:
         """A point (x, y) of msg's body frame in the robot's body frame now."""
@@ -278,15 +302,16 @@ class LaserPassage:
             width = a.p.opening_width or model.width
             prior = world_to_body(np.subtract(model.centre, start[:3]), heading)[1]
             height = model.centre[2] if kind == 'window' and height is None else height
-        ctl = OpeningPassage(standoff=a.p.opening_standoff, speed=a.p.opening_speed,
+        ctl = OpeningPassage(standoff=a.p.opening_standoff, gain=a.p.opening_lateral_gain,
+                             lateral_vmax=a.p.opening_lateral_vmax, speed=a.p.opening_speed,
                              tolerance=a.p.opening_tolerance)
         u = np.array([math.cos(heading), math.sin(heading), 0.0])
         end = start[:3] + length * u
         a.reserve(task, 'go_to', passage_box(start[:3], end, heading, prior, a.p.region_margin))
-        if abs(math.remainder(start[3] - heading, 2 * math.pi)) > a.p.yaw_tolerance:
+        if abs(wrap_angle(start[3] - heading)) > a.p.yaw_tolerance:
             a.move_to(task, start[:3], heading, f'turning to face the {kind}')
         try:
-            self._last: Optional[Tuple[SeenOpening, float]] = None
+            self._last: Optional[Tuple[SeenOpening, float, np.ndarray]] = None   # (seen, when, arena x y)
             expected = self._centre(kind, heading, width, prior, ctl, height)
             way_in = a.position()
             try:
@@ -305,17 +330,21 @@ class LaserPassage:
         task.check_preempt()
         self.agent.raise_if_crashed()
 
-    def _check_jump(self, seen: SeenOpening, kind: str, allowance_speed: float) -> None:
-        """TaskError when the opening's middle moved implausibly since the last scan it was seen in."""
+    def _check_jump(self, seen: SeenOpening, kind: str) -> None:
+        """TaskError when the opening's middle moved implausibly since the last scan it was seen in. Compared
+        where it is in the arena frame (seen from the robot's pose of now: the robot's own motion between
+        the two cancels, however fast it went; a bound on speed x time let a brisk crossing look like a
+        jump)."""
         now = self.agent.backend.now()
+        p = self.agent.position()
+        where = np.asarray(body_to_world((seen.distance, seen.lateral, 0.0), p[3]))[:2] + np.asarray(p[:2])
         if self._last is not None:
-            last, t = self._last
-            moved = math.hypot(seen.lateral - last.lateral, seen.distance - last.distance)
-            allowed = self.agent.p.opening_jump_max + allowance_speed * min(1.0, now - t)
+            moved = float(np.linalg.norm(where - self._last[2]))
+            allowed = self.agent.p.opening_jump_max
             if moved > allowed:
                 raise TaskError(f'the {kind} seen by the laser jumped {moved:.2f} m between two scans '
                                 f'(> {allowed:.2f} m): not going through')
-        self._last = (seen, now)
+        self._last = (seen, now, where)
 
     def _command(self, v_body: np.ndarray, heading: float, msg: Optional[Any], vz: float = 0.0) -> None:
         """Send a body-frame (vx, vy) and vz as a world velocity, facing `heading`, kept off laser returns."""
@@ -378,11 +407,11 @@ class LaserPassage:
                 task.feedback('FINDING', f'looking for the {kind} with the laser')
                 a.backend.sleep(dt)
                 continue
-            self._check_jump(seen, kind, ctl.lateral_vmax)
+            self._check_jump(seen, kind)
             if allowed == a.p.opening_timeout:      # at the first sight: time to slide there, then to centre
                 allowed += 2.0 * abs(seen.lateral) / max(0.1, ctl.lateral_vmax)
             expected = seen.lateral
-            yaw_ok = abs(math.remainder(a.position()[3] - heading, 2 * math.pi)) <= a.p.yaw_tolerance
+            yaw_ok = abs(wrap_angle(a.position()[3] - heading)) <= a.p.yaw_tolerance
             centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok and z_ok else 0
             if centred >= CENTRED_SCANS:
                 a.backend.loginfo(f'[{task.name}] centred on the {kind} ({seen.width:.2f} m wide, '
@@ -397,7 +426,16 @@ class LaserPassage:
                  start: np.ndarray, u: np.ndarray, length: float, height: Optional[float] = None) -> None:
         """Forward until `length` m along u from start, centred on the opening while its edges are seen,
         and (a UAV) at the height it centred on while the altimeter gives a fresh estimate (the GNSS
-        height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame)."""
+        height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame).
+
+        Gusts (realistic seed 103: a UAV leaving floor 1 by facade D's window crawled through at 0.3 m/s,
+        stopping whenever pushed off the middle, and a gust put it 0.7 m aside onto the edge): the robot
+        goes into the wall only from where its frame is still clear of it (`~frame_radius` +
+        `~opening_pass_margin` before the near face), only while centred enough that its frame is
+        `~opening_pass_margin` clear of the edges, aligned; before that it stops (and backs off to that
+        point) until gusts let it. Once in, it crosses the wall briskly (`~opening_pass_speed`: less time
+        for gusts to push it), kept to the middle hard (`~opening_lateral_gain`, `~opening_lateral_vmax`),
+        and stops going forward (re-centring) whenever its frame would overlap an edge."""
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
         nominal = length / max(0.1, ctl.speed)
@@ -417,12 +455,18 @@ class LaserPassage:
         beyond = WALL_PASSED + a.p.opening_keep_off + GNSS_DRIFT_MARGIN      # past the wall's face: clear
         # a point of the opening's middle line (arena frame) where it was last sensed: centred on it
         middle = None if self._last is None else _middle_point(p0, self._last[0].lateral)
+        reach = a.p.frame_radius + a.p.opening_pass_margin    # m before the near face: the frame still clear
+        crossing = _Crossing()
         while True:
             self._check(task)
             p = a.position()
             done = float(np.dot(p[:3] - start[:3], u))
             clear_at = -math.inf if wall is None else wall + beyond
             if done >= length - a.p.position_tolerance and done >= clear_at:
+                if crossing.worst is not None:
+                    a.backend.loginfo(f'[{task.name}] through the {kind}: at most {crossing.worst:.2f} m off its '
+                                      f'middle while crossing its wall (the frame clear of the edges by at least '
+                                      f'{crossing.least_clear:.2f} m as sensed)')
                 return                               # there, as a go-to is (seen: 'not through, 0.0 m left')
             passed = wall is not None and done > wall + WALL_PASSED
             to_go = max(length - done, clear_at - done)
@@ -442,11 +486,11 @@ class LaserPassage:
             if seen is not None and self._last is not None \
                     and seen.distance > self._last[0].distance + a.p.opening_jump_max:
                 seen = None          # an opening in a wall beyond (across the room), not the one passed
-            lateral, room = None, None
+            lateral, half = None, None               # m off the middle (body y), the opening's half width
             if seen is not None:
-                self._check_jump(seen, kind, max(ctl.speed, ctl.lateral_vmax))
+                self._check_jump(seen, kind)
                 lateral = expected = seen.lateral
-                room = seen.width / 2 - a.p.opening_keep_off
+                half = seen.width / 2
                 middle = _middle_point(p, lateral)
                 wall = done + seen.distance
             elif done < clear_at:
@@ -454,18 +498,55 @@ class LaserPassage:
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     # its edges beside the robot: keep to the middle
                     lateral = self._as_now(msg, 0.0, 0.5 * (left - right))[1]
-                    room = 0.5 * (left + right) - a.p.opening_keep_off
+                    half = 0.5 * (left + right)
                     middle = _middle_point(p, lateral)
                 elif middle is not None:
                     # between the two (edges too near ahead, not yet beside): the middle where it was last
                     # sensed, by the robot's own motion since (gusts push it there: seen, 0.67 m off into
                     # facade D's window frame, realistic seed 105)
                     lateral = float(world_to_body((middle[0] - p[0], middle[1] - p[1], 0.0), p[3])[1])
-                    room = width / 2 - a.p.opening_keep_off
+                    half = width / 2
+            to_face = math.inf if wall is None else wall - done
+            aligned = abs(wrap_angle(p[3] - heading)) <= a.p.yaw_tolerance
+            v, note = self._pass_velocity(ctl, crossing, lateral, half, to_face, reach, done < clear_at, aligned)
             task.feedback('PASSING', f'through the {kind}: {to_go:.1f} m to go'
-                          + ('' if lateral is None else f', {lateral:+.2f} m aside'))
-            self._command(ctl.through(lateral, room), heading, msg, self._keep_height(height))
+                          + ('' if lateral is None else f', {lateral:+.2f} m aside') + note)
+            self._command(v, heading, msg, self._keep_height(height))
             a.backend.sleep(dt)
+
+    def _pass_velocity(self, ctl: OpeningPassage, crossing: '_Crossing', lateral: Optional[float],
+                       half: Optional[float], to_face: float, reach: float, in_wall: bool,
+                       aligned: bool) -> Tuple[np.ndarray, str]:
+        """Body (vx, vy) of one step through, and a note for the feedback. Before the wall (to_face, m of the
+        robot centre before its near face, more than `reach`): forward at ~opening_speed while the frame would
+        go in ~opening_pass_margin clear of the edges, aligned; else stop, re-centre, back off to `reach`. In
+        the wall (from reach until clear of it): ~opening_pass_speed while the frame clears the edges; else
+        forward stops while it re-centres. Beyond: straight on at ~opening_speed."""
+        p = self.agent.p
+        edge_room = None if half is None else half - p.frame_radius      # off more: the frame meets an edge
+        if not in_wall:
+            return ctl.through(lateral, None), ''
+        if not crossing.started:
+            entry = -math.inf if edge_room is None or not aligned else edge_room - p.opening_pass_margin
+            ok = lateral is not None and abs(lateral) <= entry
+            if to_face > reach or not ok:
+                v = ctl.through(lateral, entry if ok or to_face > reach else -math.inf)
+                if to_face < reach and not ok:
+                    v[0] = -min(ctl.speed, ctl.gain * (reach - to_face))   # out of the wall's reach
+                holding = not ok                     # forward stopped: off the middle or not aligned
+                if holding and not crossing.holding and lateral is not None:
+                    self.agent.backend.loginfo(
+                        f'[{self.task.name}] holding before the wall: {lateral:+.2f} m off the opening\'s middle'
+                        + (' (not aligned)' if not aligned else f' ({entry:.2f} m lets the frame in)'))
+                crossing.holding = holding
+                return v, ' (holding before the wall)' if holding else ''
+            crossing.started = True
+            self.agent.backend.loginfo(f'[{self.task.name}] into the wall {lateral:+.2f} m off the opening\'s '
+                                       f'middle ({edge_room:.2f} m allowed by its sensed width and the frame): '
+                                       f'crossing at {p.opening_pass_speed:.1f} m/s')
+        crossing.record(lateral, edge_room)
+        v = ctl.through(lateral, edge_room, speed=p.opening_pass_speed)
+        return v, ('' if v[0] > 0 or lateral is None else ' (the frame at an edge: re-centring)')
 
     def _back_out(self, kind: str, heading: float, way_in: np.ndarray, u: np.ndarray, why: TaskError) -> None:
         """Back along -u, facing heading, to where the way through began (way_in: centred, outside the wall),
