@@ -228,11 +228,14 @@ def test_no_trusted_pose_holds_and_fails_the_task_with_why(uav):
     loc.on = False                                       # indoor_pose silent (or its source none)
     assert s.wait(5.0) == 'aborted'
     assert 'no trusted pose' in s.result.message
-    assert any('slam -> none' in m for m in be.warns)
+    assert any('slam -> none' in m for m in be.warns) and any('fails at its next' in m for m in be.warns)
     stopped_at = ual.pos.copy()
     be.clock.sleep(2.0)
     assert np.linalg.norm(ual.pos - stopped_at) < 0.3    # held where it was
     assert be.pubs['ual/set_velocity'] and not np.any([be.pubs['ual/set_velocity'][-1].twist.linear.x])
+    # velocity commands go on (the laser-guided moves: a window's crossing must not stop in the frame)
+    agent.send_velocity((0.3, 0.0, 0.0))
+    assert be.pubs['ual/set_velocity'][-1].twist.linear.x == pytest.approx(0.3)
     s2, outcome = go_to(be, 0.0, 0.0, 3.0, timeout=10)   # a new goal fails at once, saying why
     assert outcome == 'aborted' and 'no trusted pose' in s2.result.message
     loc.on = True                                        # the localization is back
