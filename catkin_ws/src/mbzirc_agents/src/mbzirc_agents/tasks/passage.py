@@ -530,11 +530,14 @@ class LaserPassage:
             entry = -math.inf if edge_room is None or not aligned else edge_room - p.opening_pass_margin
             ok = lateral is not None and abs(lateral) <= entry
             if to_face > reach or not ok:
-                v = ctl.through(lateral, entry if ok or to_face > reach else -math.inf)
+                if lateral is None:                  # the middle unknown: never into the wall's reach
+                    v = np.array([ctl.speed if to_face > reach else 0.0, 0.0])
+                else:
+                    v = ctl.through(lateral, entry if ok or to_face > reach else -math.inf)
                 if to_face < reach and not ok:
                     v[0] = -min(ctl.speed, ctl.gain * (reach - to_face))   # out of the wall's reach
-                holding = not ok                     # forward stopped: off the middle or not aligned
-                if holding and not crossing.holding and lateral is not None:
+                holding = not ok and lateral is not None     # forward stopped: off the middle or not aligned
+                if holding and not crossing.holding:
                     self.agent.backend.loginfo(
                         f'[{self.task.name}] holding before the wall: {lateral:+.2f} m off the opening\'s middle'
                         + (' (not aligned)' if not aligned else f' ({entry:.2f} m lets the frame in)'))
