@@ -547,7 +547,8 @@ class LaserPassage:
             self.agent.backend.loginfo(f'[{self.task.name}] into the wall {lateral:+.2f} m off the opening\'s '
                                        f'middle ({edge_room:.2f} m allowed by its sensed width and the frame): '
                                        f'crossing at {p.opening_pass_speed:.1f} m/s')
-        crossing.record(lateral, edge_room)
+        if -(WALL_PASSED + p.frame_radius) <= to_face <= reach:
+            crossing.record(lateral, edge_room)      # the frame within reach of the wall: what the log tells
         v = ctl.through(lateral, edge_room, speed=p.opening_pass_speed)
         return v, ('' if v[0] > 0 or lateral is None else ' (the frame at an edge: re-centring)')
 
