@@ -325,8 +325,8 @@ class ExtinguishIndoorFire(AgentTask):
         end = a.backend.now() + AIM_TURN_TIME
         while a.backend.now() < end:
             here = a.position()
-            if (abs(wrap_angle(here[3] - yaw)) <= a.p.aim_bearing_tolerance / 2
-                    and abs(here[2] - z) <= a.p.aim_height_tolerance):   # the fix's own noise: not /2
+            level = self.aim_z is None or abs(here[2] - z) <= a.p.aim_height_tolerance   # (fix noise: not /2)
+            if abs(wrap_angle(here[3] - yaw)) <= a.p.aim_bearing_tolerance / 2 and level:
                 break
             self.sleep(0.1)
         return yaw
