@@ -140,6 +140,9 @@ class AgentParams:
     jet_rise: float = _param(0.0, 'm the jet lands above the thermal camera\'s optical axis at '
                              '~indoor_fire_distance (the robot\'s nozzle and camera mounting; 0: level)')
     top_up_time: float = _param(3.0, 's of water on a confirmed, well-localised indoor fire that reads cold')
+    soak_fraction: float = _param(0.25, 'share of the water that made an indoor fire read cold pumped on, aim '
+                                  'frozen, before its cold check (a fire no longer seen may still burn)')
+    soak_min_time: float = _param(1.0, 's at least of that soak')
     top_up_max_std: float = _param(1.0, 'm: a track is well localised for a top-up when its position std is '
                                         'at most this (above the estimator\'s ~pose_std floor, 0.7 m)')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')

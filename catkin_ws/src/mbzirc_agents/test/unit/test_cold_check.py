@@ -1,6 +1,6 @@
 """ColdConfirmation: when a water task may stop pumping."""
 from mbzirc_agents import constants as C
-from mbzirc_agents.tasks.cold_check import NO_FLOW_TIME, ColdConfirmation, WaterFlow, dry_tank_verdict
+from mbzirc_agents.tasks.cold_check import NO_FLOW_TIME, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 
 
 def test_cold_needs_hot_first_then_consecutive_colds():
@@ -76,3 +76,29 @@ def test_dry_tank_verdict_is_sensing_only():
     for _ in range(5):
         never_hot.update(False)
     assert not dry_tank_verdict(never_hot)[0]
+
+
+def test_the_first_cold_answer_starts_a_soak_and_a_hot_one_ends_it():
+    """Cold after 2 L: 0.5 L more (a quarter) and at least 1 s before cold answers count; hot meanwhile: the
+    fire still shows, aimed on again, and the next cold answer starts a new soak (on the water by then)."""
+    s = Soak(fraction=0.25, min_time=1.0)
+    assert s.update(True, True, 1.0, 0.0) is True
+    assert s.update(None, True, 1.5, 0.5) is None and not s.soaking
+    assert s.update(False, False, 1.8, 0.8) is False and not s.soaking    # no water at it: no soak
+    assert s.update(False, True, 2.0, 1.0) is None and s.soaking
+    assert s.update(False, True, 2.4, 2.5) is None                      # 0.4 L of 0.5: on
+    assert s.update(False, True, 2.5, 2.6) is False and not s.soaking   # soaked: cold counts
+    assert s.update(False, True, 2.6, 2.7) is False
+    assert s.update(True, True, 2.7, 2.8) is True and not s.soaking
+    assert s.update(False, True, 3.0, 3.0) is None and s.soaking        # a new soak: 3.75 L, 4 s
+    assert s.update(False, True, 3.8, 3.5) is None
+    assert s.update(False, True, 3.8, 4.0) is False
+
+
+def test_a_soak_hides_cold_answers_from_the_cold_check():
+    c, s = ColdConfirmation(checks=2), Soak(fraction=0.5, min_time=0.0)
+    c.update(s.update(True, True, 0.0, 0.0))
+    assert not c.update(s.update(False, True, 1.0, 1.0))               # 1.5 L ends it
+    assert not c.update(s.update(False, True, 1.4, 2.0))
+    assert not c.update(s.update(False, True, 1.5, 3.0))
+    assert c.update(s.update(False, True, 1.6, 4.0))

@@ -78,6 +78,7 @@ def test_a_uav_whose_gnss_is_off_towards_the_wall_waters_from_its_clearance(scen
     pose (x 2.5) is truly 0.7 m off the wall's face; then (drift -0.8) its fix drifts 0.8 m more while it
     pumps. The laser keeps it at least ~min_wall_clearance off the wall, and the fire is put out."""
     sc = scenes(hot_until=1.5)
+    sc.ual.water = 3.0                      # hot for 0.6 L, the soak after it (>= 1 s), 6 cold answers
     sc.ual.gnss_bias = np.array([-0.8, 0.0, 0.0])
     laser = LaserScene(sc.be, sc.ual, noisy=True)
     laser.boxes = [WALL]

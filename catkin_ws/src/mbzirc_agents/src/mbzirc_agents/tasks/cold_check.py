@@ -83,6 +83,47 @@ class WaterFlow:
                 f'on; fire {fire_id} not judged out')
 
 
+class Soak:
+    """The soak: the first cold answer (with water flowing) after the fire was seen hot does not start the
+    cold check; the robot keeps pumping, on its frozen aim, a share `fraction` of the litres this pour had
+    put in when the fire first read cold (at least `min_time` s), and only then counts cold answers.
+
+    Why: a fire that no longer stands out in the thermal image may still burn. The detector's contrast test
+    drops a nearly quenched fire (realistic missions: no more sightings at about 85 % watered), a limit of
+    real thermal cameras as much as of the simulated one; the cold check's few seconds on a jet no longer
+    corrected by sightings then let the GNSS drift move it off the hole, and fires at 87 % and 99.3 % were
+    reported out. Firefighters soak past the point where the fire stops showing; how far is the team's
+    choice (~soak_fraction, ~soak_min_time), not a simulator number. A hot answer during the soak ends it:
+    the fire still shows, the robot aims on it again, and its next cold answer starts a new soak."""
+
+    def __init__(self, fraction: float, min_time: float) -> None:
+        self.fraction, self.min_time = fraction, min_time
+        self.end_litres: Optional[float] = None      # pumped litres (of this pour) that end the soak
+        self.end_time: Optional[float] = None
+        self.done = False
+
+    @property
+    def soaking(self) -> bool:
+        return self.end_litres is not None and not self.done
+
+    def update(self, hot: Optional[bool], watered: bool, pumped: float, now: float) -> Optional[bool]:
+        """One CheckFire answer in, with the litres this pour pumped so far; the answer the cold check may
+        count: cold answers become None (no evidence) until the soak is over."""
+        if hot:
+            self.end_litres, self.end_time, self.done = None, None, False
+            return hot
+        if hot is None:
+            return None
+        if self.end_litres is None:
+            if not watered:
+                return hot                           # no water at it: the cold check discards it anyway
+            self.end_litres = pumped * (1.0 + self.fraction)
+            self.end_time = now + self.min_time
+        if not self.done and pumped >= self.end_litres and now >= self.end_time:
+            self.done = True
+        return hot if self.done else None
+
+
 def dry_tank_verdict(cold: ColdConfirmation) -> tuple:
     """(out, why) for a fire whose robot's tank ran dry: out only when it already read cold `checks` times in
     a row while water still flowed into it.

@@ -16,7 +16,7 @@ from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from ..leg_guard import LegGuard
 from ..wall_clearance import back_off, stop_short
-from .cold_check import NOT_SEEN_HOT, ColdConfirmation, WaterFlow, dry_tank_verdict
+from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
@@ -27,6 +27,7 @@ AIM_TRIES = 6              # turns (and climbs) to the hot spot before pumping, 
 AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
 AIM_MAX_AGE = 0.5          # s: an older detection no longer turns the robot while it pumps
+FROZEN_HEIGHT_STEP = 0.02  # m: a frozen aim's height set-point is re-sent when it moved this much
 
 
 class Sighting(NamedTuple):
@@ -195,6 +196,7 @@ class ExtinguishIndoorFire(AgentTask):
         self.aim_z: Optional[float] = None               # the height held to aim (UAV), None: not steered yet
         self.watering_z: Optional[float] = None          # the height the watering pose was reached at
         self.on_jet = True                               # the last sighting's height correction was all sent
+        self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
 
     def _wall_points(self) -> Optional[np.ndarray]:
         """The laser's returns for the wall clearance; None when it is off or without a fresh scan (said)."""
@@ -392,9 +394,17 @@ class ExtinguishIndoorFire(AgentTask):
         move from where it is; the watering pose moves with it).
         A pump that moves no water for
         cold_check.NO_FLOW_TIME fails the goal.
+
+        Once seen hot, the first cold answer starts a soak (cold_check.Soak: ~soak_fraction of the water that
+        made the fire read cold, at least ~soak_min_time), and only then do cold answers count. While the fire
+        reads cold the aim is frozen (`_freeze_aim`): the detector no longer reports it, so nothing corrects
+        the aim, and re-deriving it from GNSS moves the jet by the drift of the GNSS error.
         """
         a = self.agent
         pose = np.append(a.position()[:3], yaw)
+        soak = Soak(a.p.soak_fraction, a.p.soak_min_time)
+        frozen, first_level = False, None
+        self.frozen_true_z = None
         try:
             a.start_pump()
             start = a.backend.now()
@@ -410,13 +420,19 @@ class ExtinguishIndoorFire(AgentTask):
                 stalled = flow.stalled(now, fire_id)
                 if stalled:
                     raise TaskError(stalled)
-                if cold.seen_hot:
+                if soak.soaking:
+                    self.feedback('SOAKING', f'fire {fire_id} reads cold: soaking it, aim frozen, water '
+                                             f'{a.water_level:.2f} L')
+                elif cold.seen_hot:
                     self.feedback('SHOOTING', f'fire {fire_id}: water {a.water_level:.2f} L')
                 else:
                     self.feedback('TOPPING_UP', f'fire {fire_id} reads cold but was never put out: water '
                                                 f'{a.water_level:.2f} L')
                 self.sleep(0.5)
-                pose[3] = self._keep_aim(pose[3])
+                if frozen:
+                    self._hold_frozen_height(pose[3])
+                else:
+                    pose[3] = self._keep_aim(pose[3])
                 if self.aim_z is not None:
                     pose[2] = self.aim_z                         # the watering pose climbs with the aim
                 here = a.position()
@@ -427,8 +443,16 @@ class ExtinguishIndoorFire(AgentTask):
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
                 watered = flow.update(a.water_level, a.backend.now()) and at_pose and self.on_jet
-                if cold.update(a.fire_detected(), watered):
+                if first_level is None and math.isfinite(a.water_level):
+                    first_level = a.water_level
+                pumped = 0.0 if first_level is None or not math.isfinite(a.water_level) \
+                    else first_level - a.water_level
+                if cold.update(soak.update(a.fire_detected(), watered, pumped, a.backend.now()), watered):
                     break
+                reads_cold = cold.seen_hot and (soak.soaking or cold.cold_in_row > 0)
+                if reads_cold != frozen:
+                    frozen = reads_cold
+                    self._freeze_aim(frozen)
         finally:
             a.stop_pump()
         if cold.out:
@@ -451,6 +475,35 @@ class ExtinguishIndoorFire(AgentTask):
             return yaw
         self._turn_in_place(new_yaw)
         return new_yaw
+
+    def _freeze_aim(self, frozen: bool) -> None:
+        """Freeze (or free) the aim that put water in: the heading is held as it is (no sighting turns it),
+        and a UAV's height is held on its true height, the held set-point less the vertical GNSS error its
+        altimeter estimates (the source least affected by GNSS drift), re-sent as that error wanders; without
+        an altimeter estimate the commanded set-point is held as it is (never re-derived from GNSS)."""
+        a = self.agent
+        self.frozen_true_z = None
+        if not frozen or a.ROBOT_TYPE != 'uav':
+            return
+        self.aim_z = self._held_z(a.position())
+        e = a.clearance.vertical_error()
+        if e is not None:
+            self.frozen_true_z = self.aim_z - e
+        a.backend.loginfo(f'[{self.name}] the fire reads cold: aim frozen at {self.aim_z:.2f} m (GNSS), '
+                          + ('held by the altimeter' if e is not None else 'no altimeter estimate: set-point held'))
+
+    def _hold_frozen_height(self, yaw: float) -> None:
+        """The frozen aim's height set-point follows the altimeter's estimate of the vertical GNSS error, so
+        that the UAV's true height (where the jet lands) stays put; unchanged without an estimate."""
+        if self.frozen_true_z is None:
+            return
+        e = self.agent.clearance.vertical_error()
+        if e is None:
+            return
+        z = self.frozen_true_z + e
+        if abs(z - self.aim_z) >= FROZEN_HEIGHT_STEP:
+            self.aim_z = z
+            self._turn_in_place(yaw)
 
     def _heading_at(self, pose, here) -> bool:
         return abs(wrap_angle(here[3] - pose[3])) <= self.agent.p.yaw_tolerance
