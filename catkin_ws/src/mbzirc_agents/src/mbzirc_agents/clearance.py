@@ -22,7 +22,12 @@ Rules:
   last reading's surface) fall below min_clearance + hysteresis within `horizon` s (it climbs back when
   below);
 - no fresh valid altimeter reading (stale, NaN, no return): e is unknown; the bounds use the GNSS height
-  with `fallback_margin` more clearance (and the caller warns, throttled).
+  with `fallback_margin` more clearance (and the caller warns, throttled);
+- passing an opening (`hold`): readings are not believed (the altimeter sees the sill, or the wall's top,
+  which the plan does not have) and the estimate of the hold's start stays fresh, at most `hold_max_age`;
+  a stale estimate is not held. Why: a reading after a gap is taken without the jump test (a re-fix is
+  believed at once), so a UAV held 1.5 s over a floor-1 window's sill (1.5 m above the storey's floor
+  in the plan) took the sill for that floor, believed its fix 1.5 m low and climbed into the lintel.
 Pure: no ROS, no clock of its own (times are passed in), tested in test_clearance.py.
 """
 from __future__ import annotations
@@ -45,6 +50,7 @@ class ClearanceConfig:
     max_step: float = 0.5           # m: nor one moving a fresh estimate by more (a sill, a robot below)
     filter_tau: float = 0.3         # s: smoothing of e (noise of the fix and of the altimeter)
     horizon: float = 1.0            # s: a velocity may close the height to the bound in this time, not less
+    hold_max_age: float = 8.0       # s: an estimate held through an opening (e drifts ~0.2 m in that time)
 
 
 def surfaces_at(x: float, y: float, footprints: Sequence[Sequence[float]], floor_heights: Sequence[float],
@@ -77,6 +83,7 @@ class ClearanceGuard:
         self.surface: Optional[float] = None    # the plan's surface under the last valid reading, m
         self._last = (math.nan, math.nan)       # (height read, GNSS z) of the last valid reading
         self.valid_time = -math.inf             # stamp of the last valid reading
+        self.held_until = -math.inf             # the estimate is held (readings ignored) until then
         self.last_problem = 'no altimeter reading yet'
 
     # ---- input -------------------------------------------------------------------------------------------
@@ -91,6 +98,9 @@ class ClearanceGuard:
         """One altimeter reading (REP 117: -inf too close, +inf no return, NaN invalid) taken at `stamp`
         when the GNSS position was gnss_xyz."""
         r = float(reading)
+        if stamp <= self.held_until:
+            self.last_problem = 'none (the estimate is held while passing an opening)'
+            return
         if math.isnan(r):
             self.last_problem = 'invalid (NaN) reading'
             return
@@ -128,8 +138,21 @@ class ClearanceGuard:
 
     # ---- state ---------------------------------------------------------------------------------------------
     def fresh(self, now: float) -> bool:
-        """True when the last valid reading is at most max_age old."""
-        return now - self.valid_time <= self.cfg.max_age
+        """True when the last valid reading is at most max_age old, or the estimate is held."""
+        return now - self.valid_time <= self.cfg.max_age or (self.error is not None and now <= self.held_until)
+
+    def hold(self, now: float) -> bool:
+        """Hold the estimate as it is (readings ignored) for at most hold_max_age; False when it is not fresh
+        (nothing to hold: the fallback applies as before)."""
+        if self.error is None or now - self.valid_time > self.cfg.max_age:
+            return False
+        self.held_until = now + self.cfg.hold_max_age
+        return True
+
+    def release(self) -> None:
+        """End a hold: readings count again (after a hold longer than max_age the next one is taken as it is,
+        as after any gap: past the opening the altimeter sees a surface of the plan)."""
+        self.held_until = -math.inf
 
     def problem(self, now: float) -> str:
         """Why the guard is on its fallback now ('' when it is not)."""

@@ -8,6 +8,7 @@ sent again, raised. A stale or invalid altimeter gives a throttled error and the
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 from typing import Any, Callable, Optional, Sequence
@@ -60,6 +61,21 @@ class ClearanceKeeper:
         with self.lock:
             g = self.guard
             return g.error if g.fresh(self.agent.backend.now()) else None
+
+    @contextlib.contextmanager
+    def estimate_held(self, why: str):
+        """Within: the vertical error estimate is held as it is (clearance.py, `hold`), e.g. while passing an
+        opening whose sill the altimeter would take for a floor."""
+        a = self.agent
+        with self.lock:
+            held = self.guard.hold(a.backend.now())
+        if not held:
+            a.backend.logwarn(f'clearance guard: no fresh altimeter estimate to hold while {why}')
+        try:
+            yield held
+        finally:
+            with self.lock:
+                self.guard.release()
 
     # ---- commands ------------------------------------------------------------------------------------------
     def set_point_z(self, x: float, y: float, z: float) -> float:

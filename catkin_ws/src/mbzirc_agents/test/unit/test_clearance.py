@@ -102,3 +102,45 @@ def test_velocities_never_take_the_height_below_the_bound(guard, height, vz, exp
 def test_velocity_fallback_uses_the_gnss_height_with_the_margin(guard):
     assert guard.safe_vz(-0.5, (0.0, 0.0, 1.5), 10.0) == pytest.approx(0.0)        # 1.5 = 0.5 + 1.0
     assert guard.safe_vz(-0.5, (0.0, 0.0, 1.2), 10.0) == pytest.approx(0.3)
+
+
+FLOOR1_WINDOW = (15.5, 6.8)          # in the tower's floor-1 window on its y = 6.7 facade (storey floor 5.0 in the plan; sill higher)
+
+
+def _hold_over_a_sill(guard, held: bool):
+    """A UAV with its fix 0.3 m high, over the ground before a floor-1 window, then 4 s in the window over a
+    sill 1.5 m above the storey's floor (a height the plan does not have), the altimeter at 10 Hz."""
+    true_z, e_true, sill = 7.5, 0.3, 6.5
+    t = 10.0
+    for _ in range(10):                                   # outside: the ground below
+        guard.on_reading(true_z, t, (FLOOR1_WINDOW[0], 4.0, true_z + e_true))
+        t += 0.1
+    assert guard.error == pytest.approx(e_true)
+    if held:
+        assert guard.hold(t)
+    for _ in range(40):                                   # in the window: the sill below
+        guard.on_reading(true_z - sill, t, (*FLOOR1_WINDOW, true_z + e_true))
+        t += 0.1
+    return t, e_true
+
+
+def test_a_sill_read_after_a_gap_is_taken_for_the_floor_without_a_hold(guard):
+    t, e_true = _hold_over_a_sill(guard, held=False)
+    assert guard.error == pytest.approx(e_true + 1.5)    # the defect the hold exists for: 1.5 m off
+
+
+def test_passing_an_opening_the_estimate_is_held_not_taken_from_the_sill(guard):
+    t, e_true = _hold_over_a_sill(guard, held=True)
+    assert guard.fresh(t) and guard.error == pytest.approx(e_true)
+    guard.release()
+    guard.on_reading(7.5 - 5.0, t + 0.1, (15.5, 9.0, 7.5 + e_true))   # in the room: the storey's floor
+    assert guard.error == pytest.approx(e_true)
+
+
+def test_a_held_estimate_goes_stale_after_hold_max_age_and_a_stale_one_is_not_held(guard):
+    guard.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))
+    assert guard.hold(10.5)
+    assert guard.fresh(10.5 + guard.cfg.hold_max_age) and not guard.fresh(10.6 + guard.cfg.hold_max_age)
+    g2 = ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
+    g2.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))
+    assert not g2.hold(12.0) and not g2.fresh(12.0)

@@ -25,6 +25,7 @@ that no later leg starts inside the wall.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 from typing import Any, Optional, Tuple
 
@@ -315,7 +316,8 @@ class LaserPassage:
             expected = self._centre(kind, heading, width, prior, ctl, height)
             way_in = a.position()
             try:
-                self._through(kind, heading, width, expected, ctl, start, u, length, height)
+                with self._height_estimate_held(kind):
+                    self._through(kind, heading, width, expected, ctl, start, u, length, height)
             except TaskError as e:
                 if a.ual_state == C.UAL_UNINITIALIZED:
                     raise
@@ -324,6 +326,13 @@ class LaserPassage:
             a.hold()
         a.reserve(task, 'hold', hold_box(a, a.position()))
         a.free('go_to')
+
+    def _height_estimate_held(self, kind: str):
+        """Through the opening a UAV holds its altimeter's estimate of the vertical GNSS error: over the sill
+        (or a doorway's floor edge) the altimeter measures what the arena plan does not have
+        (clearance.py, `hold`). No guard (the UGV): nothing to hold."""
+        keeper = getattr(self.agent, 'clearance', None)
+        return contextlib.nullcontext() if keeper is None else keeper.estimate_held(f'passing the {kind}')
 
     def _check(self, task: AgentTask) -> None:
         """Each control step: preemption, and a robot that crashed (its UAL UNINITIALIZED) ends the task."""
