@@ -23,9 +23,9 @@ Rules:
   below);
 - no fresh valid altimeter reading (stale, NaN, no return): e is unknown; the bounds use the GNSS height
   with `fallback_margin` more clearance (and the caller warns, throttled);
-- passing an opening (`hold`): readings are not believed (the altimeter sees the sill, or the wall's top,
-  which the plan does not have) and the estimate of the hold's start stays fresh, at most `hold_max_age`;
-  a stale estimate is not held. Why: a reading after a gap is taken without the jump test (a re-fix is
+- passing an opening (`hold` .. `release`): readings are not believed (the altimeter sees the sill, or the
+  wall's top, which the plan does not have); the estimate of the hold's start stays fresh for at most
+  `hold_max_age`, then the fallback applies until the release; a stale estimate is not held. Why: a reading after a gap is taken without the jump test (a re-fix is
   believed at once), so a UAV held 1.5 s over a floor-1 window's sill (1.5 m above the storey's floor
   in the plan) took the sill for that floor, believed its fix 1.5 m low and climbed into the lintel.
 Pure: no ROS, no clock of its own (times are passed in), tested in test_clearance.py.
@@ -83,7 +83,8 @@ class ClearanceGuard:
         self.surface: Optional[float] = None    # the plan's surface under the last valid reading, m
         self._last = (math.nan, math.nan)       # (height read, GNSS z) of the last valid reading
         self.valid_time = -math.inf             # stamp of the last valid reading
-        self.held_until = -math.inf             # the estimate is held (readings ignored) until then
+        self.holding = False                    # passing an opening: readings ignored until the release
+        self.held_until = -math.inf             # the held estimate counts as fresh until then
         self.last_problem = 'no altimeter reading yet'
 
     # ---- input -------------------------------------------------------------------------------------------
@@ -98,8 +99,8 @@ class ClearanceGuard:
         """One altimeter reading (REP 117: -inf too close, +inf no return, NaN invalid) taken at `stamp`
         when the GNSS position was gnss_xyz."""
         r = float(reading)
-        if stamp <= self.held_until:
-            self.last_problem = 'none (the estimate is held while passing an opening)'
+        if self.holding:
+            self.last_problem = 'readings ignored while passing an opening (its sill is not in the plan)'
             return
         if math.isnan(r):
             self.last_problem = 'invalid (NaN) reading'
@@ -142,8 +143,9 @@ class ClearanceGuard:
         return now - self.valid_time <= self.cfg.max_age or (self.error is not None and now <= self.held_until)
 
     def hold(self, now: float) -> bool:
-        """Hold the estimate as it is (readings ignored) for at most hold_max_age; False when it is not fresh
-        (nothing to hold: the fallback applies as before)."""
+        """Ignore readings until release(); the estimate as it is now counts as fresh for at most
+        hold_max_age. False when it is not fresh (nothing to hold: the fallback applies meanwhile)."""
+        self.holding = True
         if self.error is None or now - self.valid_time > self.cfg.max_age:
             return False
         self.held_until = now + self.cfg.hold_max_age
@@ -152,7 +154,7 @@ class ClearanceGuard:
     def release(self) -> None:
         """End a hold: readings count again (after a hold longer than max_age the next one is taken as it is,
         as after any gap: past the opening the altimeter sees a surface of the plan)."""
-        self.held_until = -math.inf
+        self.holding, self.held_until = False, -math.inf
 
     def problem(self, now: float) -> str:
         """Why the guard is on its fallback now ('' when it is not)."""

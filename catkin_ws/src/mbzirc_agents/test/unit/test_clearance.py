@@ -137,10 +137,17 @@ def test_passing_an_opening_the_estimate_is_held_not_taken_from_the_sill(guard):
     assert guard.error == pytest.approx(e_true)
 
 
-def test_a_held_estimate_goes_stale_after_hold_max_age_and_a_stale_one_is_not_held(guard):
+def test_a_held_estimate_goes_stale_after_hold_max_age_readings_wait_for_the_release(guard):
     guard.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))
     assert guard.hold(10.5)
     assert guard.fresh(10.5 + guard.cfg.hold_max_age) and not guard.fresh(10.6 + guard.cfg.hold_max_age)
+    guard.on_reading(0.75, 19.0, (0.0, 0.0, 1.25))         # still in the opening: ignored, fallback
+    assert not guard.fresh(19.1)
     g2 = ClearanceGuard(ClearanceConfig(), C.BUILDINGS, C.FLOOR_HEIGHTS, 0.0)
     g2.on_reading(0.75, 10.0, (0.0, 0.0, 1.25))
     assert not g2.hold(12.0) and not g2.fresh(12.0)
+    g2.on_reading(0.75, 12.1, (0.0, 0.0, 1.25))            # not believed before the release
+    assert not g2.fresh(12.2)
+    g2.release()
+    g2.on_reading(0.75, 12.3, (0.0, 0.0, 1.35))
+    assert g2.fresh(12.4) and g2.error == pytest.approx(0.6)
