@@ -156,6 +156,15 @@ class AgentParams:
     pose_jump_max: float = _param(3.0, 'm: a reported pose this far from the last one is a GNSS jump, doubted')
     pose_jump_hold: float = _param(2.0, 's the robot holds (zero velocity) while doubting a jump; a jumped '
                                    'pose still reported after that is accepted')
+    use_localization: bool = _param(True, 'with no GNSS fix (ual/gnss_status) fly on localization/pose while '
+                                    'localization/source says slam (pose_source.py); false: on the UAL pose always')
+    localization_timeout: float = _param(1.0, 's (sim): an older localization/pose is not valid')
+    localization_pair_gap: float = _param(0.2, 's: a localization/pose is paired with the UAL poses at most this '
+                                          'far from its stamp (the offset between the frames)')
+    pose_source_grace: float = _param(0.5, 's a pose source of none (no fix, no valid localization) must last '
+                                      'before the robot holds and its task fails')
+    pose_offset_rate: float = _param(0.5, 'm/s: the UAL-to-arena offset applied follows the measured one at '
+                                     'most this fast (no jump of the pose when the source switches)')
     home: List[float] = _param([], 'x, y, z of home; empty: the first pose received', lengths=(0, 3))
     door_outside: List[float] = _param(list(C.UGV_DOOR_OUTSIDE), 'UGV: x, y in front of the door',
                                        lengths=(2,))
@@ -174,15 +183,6 @@ class AgentParams:
         if problems:
             raise ParamError('; '.join(problems))
         return cls(**good)
-    use_localization: bool = _param(True, 'with no GNSS fix (ual/gnss_status) fly on localization/pose while '
-                                    'localization/source says slam (pose_source.py); false: on the UAL pose always')
-    localization_timeout: float = _param(1.0, 's (sim): an older localization/pose is not valid')
-    localization_pair_gap: float = _param(0.2, 's: a localization/pose is paired with the UAL poses at most this '
-                                          'far from its stamp (the offset between the frames)')
-    pose_source_grace: float = _param(0.5, 's a pose source of none (no fix, no valid localization) must last '
-                                      'before the robot holds and its task fails')
-    pose_offset_rate: float = _param(0.5, 'm/s: the UAL-to-arena offset applied follows the measured one at '
-                                     'most this fast (no jump of the pose when the source switches)')
 
 
 def check_values(values: Mapping[str, Any]) -> Tuple[Dict[str, Any], List[str]]:
