@@ -8,7 +8,6 @@ sent again, raised. A stale or invalid altimeter gives a throttled error and the
 """
 from __future__ import annotations
 
-import contextlib
 import math
 import threading
 from typing import Any, Callable, Optional, Sequence
@@ -62,20 +61,21 @@ class ClearanceKeeper:
             g = self.guard
             return g.error if g.fresh(self.agent.backend.now()) else None
 
-    @contextlib.contextmanager
-    def estimate_held(self, why: str):
-        """Within: the vertical error estimate is held as it is (clearance.py, `hold`), e.g. while passing an
-        opening whose sill the altimeter would take for a floor."""
+    def hold_estimate(self, why: str) -> bool:
+        """From now until release_estimate(), altimeter readings are ignored and the vertical error estimate is
+        held as it is (clearance.py, `hold`), e.g. while the UAV's frame is in an opening whose sill the
+        altimeter would take for a floor. False (warned) when there is no fresh estimate to hold."""
         a = self.agent
         with self.lock:
             held = self.guard.hold(a.backend.now())
         if not held:
             a.backend.logwarn(f'clearance guard: no fresh altimeter estimate to hold while {why}')
-        try:
-            yield held
-        finally:
-            with self.lock:
-                self.guard.release()
+        return held
+
+    def release_estimate(self) -> None:
+        """End a hold_estimate (no-op without one)."""
+        with self.lock:
+            self.guard.release()
 
     # ---- commands ------------------------------------------------------------------------------------------
     def set_point_z(self, x: float, y: float, z: float) -> float:

@@ -25,7 +25,6 @@ that no later leg starts inside the wall.
 """
 from __future__ import annotations
 
-import contextlib
 import math
 from typing import Any, Optional, Tuple
 
@@ -316,23 +315,30 @@ class LaserPassage:
             expected = self._centre(kind, heading, width, prior, ctl, height)
             way_in = a.position()
             try:
-                with self._height_estimate_held(kind):
-                    self._through(kind, heading, width, expected, ctl, start, u, length, height)
+                self._through(kind, heading, width, expected, ctl, start, u, length, height)
             except TaskError as e:
                 if a.ual_state == C.UAL_UNINITIALIZED:
                     raise
                 self._back_out(kind, heading, way_in, u, e)
         finally:
+            self._release_height_estimate()
             a.hold()
         a.reserve(task, 'hold', hold_box(a, a.position()))
         a.free('go_to')
 
-    def _height_estimate_held(self, kind: str):
-        """Through the opening a UAV holds its altimeter's estimate of the vertical GNSS error: over the sill
-        (or a doorway's floor edge) the altimeter measures what the arena plan does not have
-        (clearance.py, `hold`). No guard (the UGV): nothing to hold."""
+    def _hold_height_estimate(self) -> None:
+        """From the frame going into the opening's wall until the passage ends (backing out included) a UAV
+        holds its altimeter's estimate of the vertical GNSS error: over the sill the altimeter measures what
+        the arena plan does not have (clearance.py, `hold`). Before the wall the readings (the ground, the
+        room's floor) still count. No guard (the UGV): nothing to hold."""
         keeper = getattr(self.agent, 'clearance', None)
-        return contextlib.nullcontext() if keeper is None else keeper.estimate_held(f'passing the {kind}')
+        if keeper is not None:
+            keeper.hold_estimate("in an opening's wall")
+
+    def _release_height_estimate(self) -> None:
+        keeper = getattr(self.agent, 'clearance', None)
+        if keeper is not None:
+            keeper.release_estimate()
 
     def _check(self, task: AgentTask) -> None:
         """Each control step: preemption, and a robot that crashed (its UAL UNINITIALIZED) ends the task."""
@@ -553,6 +559,7 @@ class LaserPassage:
                 crossing.holding = holding
                 return v, ' (holding before the wall)' if holding else ''
             crossing.started = True
+            self._hold_height_estimate()
             self.agent.backend.loginfo(f'[{self.task.name}] into the wall {lateral:+.2f} m off the opening\'s '
                                        f'middle ({edge_room:.2f} m allowed by its sensed width and the frame): '
                                        f'crossing at {p.opening_pass_speed:.1f} m/s')
