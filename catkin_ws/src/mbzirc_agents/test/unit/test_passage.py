@@ -530,3 +530,29 @@ def test_the_passage_reserves_the_way_aside_to_the_opening():
     from mbzirc_agents.tasks.passage import passage_box
     lo, hi = passage_box((22.7, 14.5, 6.5), (15.7, 14.5, 6.5), math.pi, 3.5, 1.0)
     assert lo[1] <= 11.0 - 1.0 and hi[1] >= 14.5 + 1.0 and lo[0] <= 15.7 - 1.0 and hi[0] >= 22.7 + 1.0
+
+
+def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav):
+    """Realistic seeds 103 and 106: leaving floor 1 from a viewpoint at the fire's height (1.4 m above the
+    floor) for the window's 2.5 m, a diagonal leg took the UAV to the facade's inner face below the sill,
+    its laser plane looking through the window above the wall it hit. The height comes first, where the
+    UAV is; then the leg, in the plane the laser sees."""
+    agent, ual, be, scene = uav
+    ual.pos = np.array([15.7, 10.5, 6.4])                   # a viewpoint on floor 1, west room
+    ual.yaw = -math.pi / 2
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    track, stop = [], []
+
+    def record():
+        while not stop:
+            track.append(ual.pos.copy())
+            be.clock.sleep(0.05)
+    be.clock.start_thread(record, name='record')
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 8.9, 7.6, -math.pi / 2)]))
+    assert s.wait(200) == 'succeeded', s.result.message
+    stop.append(True)
+    low = [p for p in track if p[2] < 7.6 - 0.3]
+    assert low and max(abs(p[1] - 10.5) for p in low) < 0.3, 'moved along the leg before climbing'
+    assert abs(ual.pos[2] - 7.6) < 0.2 and abs(ual.pos[1] - 8.9) < 0.3, ual.pos
