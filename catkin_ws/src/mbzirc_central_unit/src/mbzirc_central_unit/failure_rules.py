@@ -6,10 +6,10 @@
    command (agent, task, target) is not sent again before a back-off that doubles with each blocked failure
    (`leg_blocked_backoff` s, at most `leg_blocked_backoff_max` s); after `max_blocked_legs` blocked
    failures of it the agent gives that target up (another robot may take it, or nobody: logged).
-2. A facade fire not seen hot. extinguish_facade_fire aborts with 'fire N not seen hot from the watering
-   pose: not judged out: ...' after pumping water on the fire's locked hole without one hot answer there
-   (the agents' cold_check.NOT_SEEN_HOT; both abort paths pump on the hole first). A fire already put out
-   reads like that, and the estimator keeps it active (realistic seed 103: fire C_0 out, 4-6 such aborts).
+2. A fire not seen hot. extinguish_facade_fire / extinguish_indoor_fire abort with 'fire N not seen hot
+   from the watering pose: not judged out: ...' after pumping water on the fire's locked hole (facade) or
+   its confirmed track (indoors) without one hot answer there (the agents' cold_check.NOT_SEEN_HOT; every
+   such abort pumps first). A fire already put out reads like that, and the estimator keeps it active.
    Rule: after `not_seen_hot_limit` such aborts (any robots) the fire is "probably out, unconfirmed": no
    robot is sent to it while other work remains; it may be revisited when nothing else is left. Other
    failures (fire not found, no water flows, time-outs) never count: a fire merely not found is not out.
@@ -33,10 +33,10 @@ NOT_SEEN_HOT = "not seen hot"
 
 
 def failure_kind(task: str, message: str) -> Optional[str]:
-    """LEG_BLOCKED, NOT_SEEN_HOT (only from extinguish_facade_fire) or None for any other failure."""
+    """LEG_BLOCKED, NOT_SEEN_HOT (only from the extinguish tasks) or None for any other failure."""
     if LEG_BLOCKED_TEXT in message:
         return LEG_BLOCKED
-    if task == C.EXTINGUISH_FACADE_FIRE and NOT_SEEN_HOT_TEXT in message:
+    if task in (C.EXTINGUISH_FACADE_FIRE, C.EXTINGUISH_INDOOR_FIRE) and NOT_SEEN_HOT_TEXT in message:
         return NOT_SEEN_HOT
     return None
 
@@ -75,7 +75,7 @@ class LegBackoff:
 
 
 class UnconfirmedFires:
-    """Facade fires that repeatedly were not seen hot after water on their hole: probably out."""
+    """Fires that repeatedly were not seen hot after water from their watering pose: probably out."""
 
     def __init__(self, limit: int) -> None:
         self.limit = limit
@@ -85,7 +85,7 @@ class UnconfirmedFires:
         """A not-seen-hot abort on `fire_id`; the log line when the fire just became probably out."""
         self.aborts[fire_id] += 1
         if self.aborts[fire_id] == self.limit:
-            return (f"facade fire {fire_id}: not seen hot after water on its hole {self.limit} times (last by "
+            return (f"fire {fire_id}: not seen hot after water from its watering pose {self.limit} times (last by "
                     f"{agent_id}): probably out, unconfirmed; no robot is sent to it while other work remains")
         return None
 

@@ -81,7 +81,7 @@ class Strategy:
         return self.router.altitude(agent_id)
 
     def probably_out(self, fire_id: int) -> bool:
-        """A facade fire repeatedly not seen hot after water on its hole (failure_rules.py), for the status."""
+        """A fire repeatedly not seen hot after water from its watering pose (failure_rules.py), for the status."""
         return self.book.unconfirmed.probably_out(fire_id)
 
     def broken(self, agent_id: str) -> bool:

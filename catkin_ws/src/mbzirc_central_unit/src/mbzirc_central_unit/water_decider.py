@@ -67,7 +67,7 @@ class WaterDecider(Decider):
                 f = nearest(a, group)
                 return (C.KIND_FACADE, f.floor, f)
         # 2. an indoor fire already known on a floor I own or nobody owns.
-        indoor = [f for f in world.fires_of(C.KIND_INDOOR) if f.floor in self.indoor.uav_floors(world)
+        indoor = [f for f in self._confirmed(world.fires_of(C.KIND_INDOOR)) if f.floor in self.indoor.uav_floors(world)
                   and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
                   and self.p.layout.room_for(f.floor, f.position) is not None]
         if indoor:
@@ -99,12 +99,13 @@ class WaterDecider(Decider):
             if here in candidates and near_building(a):
                 return (kind, here, None)
             return (kind, candidates[0], None)
-        # 4. the end: facade fires probably out but unconfirmed, revisited while time remains
-        late = [f for f in world.fires_of(C.KIND_FACADE) if self.book.unconfirmed.probably_out(f.fire_id)
-                and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
+        # 4. the end: fires probably out but unconfirmed, revisited while time remains
+        late = [f for f in world.fires_of(C.KIND_FACADE) + world.fires_of(C.KIND_INDOOR)
+                if self.book.unconfirmed.probably_out(f.fire_id) and owners.free_for(f.floor, aid, world)
+                and self._fire_ok(a, f)]
         if late:
             f = nearest(a, late)
-            return (C.KIND_FACADE, f.floor, f)
+            return (f.kind, f.floor, f)
         return None
 
     def _confirmed(self, fires: list[FireView]) -> list[FireView]:

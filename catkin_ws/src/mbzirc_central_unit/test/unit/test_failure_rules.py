@@ -1,5 +1,5 @@
-"""failure_rules.py: a blocked leg backs off and is given up; a facade fire repeatedly not seen hot after water
-on its hole is probably out. Sim time is the WorldView's (a fake clock): no sleeping."""
+"""failure_rules.py: a blocked leg backs off and is given up; a fire repeatedly not seen hot after water from its
+watering pose is probably out. Sim time is the WorldView's (a fake clock): no sleeping."""
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit import geometry as G
 from mbzirc_central_unit.command import Command
@@ -13,6 +13,8 @@ BLOCKED = ("a laser return 0.96 m ahead blocks the leg to (19.5, 11.0) (hit with
            "2 returns): holding")
 NOT_HOT = ("fire 7 not seen hot from the watering pose: not judged out: 40 s of water on its hole "
            "(seen through) without a hot answer there; left active")
+NOT_HOT_INDOORS = ("fire 18 not seen hot from the watering pose: not judged out: 3 s of top-up water on its "
+                   "confirmed track, left active")
 
 
 def _ugv_world(t):
@@ -29,11 +31,12 @@ def test_failure_kinds_by_the_agents_texts():
     assert failure_kind(C.SEARCH_INDOOR, BLOCKED) == LEG_BLOCKED
     assert failure_kind(C.GO_TO, BLOCKED) == LEG_BLOCKED
     assert failure_kind(C.EXTINGUISH_FACADE_FIRE, NOT_HOT) == NOT_SEEN_HOT
+    assert failure_kind(C.EXTINGUISH_INDOOR_FIRE, NOT_HOT_INDOORS) == NOT_SEEN_HOT
     # a fire not found, no water, a time-out, or the phrase from another task: not 'not seen hot'
     for task, text in ((C.EXTINGUISH_FACADE_FIRE, "fire 7 not found"),
                        (C.EXTINGUISH_FACADE_FIRE, "no water flows: the tank level stayed at 1.00 L for 4 s"),
                        (C.EXTINGUISH_FACADE_FIRE, "timed out after 420 s"),
-                       (C.EXTINGUISH_INDOOR_FIRE, NOT_HOT)):
+                       (C.SEARCH_INDOOR, NOT_HOT)):
         assert failure_kind(task, text) is None
 
 
@@ -102,13 +105,38 @@ def test_a_facade_fire_not_seen_hot_twice_is_probably_out_and_left_while_other_w
     _abort(s, "2", NOT_HOT)
     _abort(s, "3", NOT_HOT)                            # two robots, water pumped on the hole each time
     notes = s.take_notes()
-    assert any("facade fire 7" in n and "probably out" in n for n in notes), notes
+    assert any("fire 7" in n and "probably out" in n for n in notes), notes
     assert s.probably_out(7) and not s.probably_out(5)   # shown on /central_unit/status
     cmds = s.decide(_uav_world())
     assert cmds and not _on_fire(cmds, 7)              # before: UAV 2 sent to fire 7 again (1 failure < 3)
     s.book.in_flight.clear()
     # nothing else left (fire 5 out): fire 7 is revisited while time remains
     assert _on_fire(s.decide(_uav_world(C.STATUS_EXTINGUISHED)), 7)
+
+
+IN2_E = (17.95, 16.5, 11.5)       # an indoor fire of floor 2, on the east side of the interior wall
+
+
+def _inside_world(fire5_status):
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 19.9, 16.5, 11.5, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    fires = {18: FireView(18, *IN2_E, C.KIND_INDOOR), 5: FireView(5, *FIRE_5, C.KIND_FACADE, fire5_status)}
+    return WorldView(0.0, {"2": a}, fires)
+
+
+def test_an_indoor_fire_already_out_is_not_revisited_by_every_refilled_uav_while_other_work_remains():
+    s = Strategy(StrategyParams(facade_searches=0))
+    assert _on_fire(s.decide(_inside_world(C.STATUS_EXTINGUISHED)), 18)   # the UAV beside it: fire 18
+    s.book.in_flight.clear()
+    for agent in ("3", "2"):            # two robots pumped on its track without a hot answer there
+        cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
+        s.on_sent(cmd)
+        s.on_result(cmd, False, {"message": NOT_HOT_INDOORS, "extinguished": False}, now=0.0)
+    assert any("fire 18" in n and "probably out" in n for n in s.take_notes())
+    cmds = s.decide(_inside_world(C.STATUS_ACTIVE))
+    assert cmds and not _on_fire(cmds, 18)      # before: sent to fire 18 again and again (failures < 3)
+    s.book.in_flight.clear()
+    assert _on_fire(s.decide(_inside_world(C.STATUS_EXTINGUISHED)), 18)   # nothing else left: revisited
 
 
 def test_a_facade_fire_merely_not_found_is_not_probably_out():
