@@ -388,9 +388,18 @@ class LaserPassage:
             z = float(self.agent.position()[2])
         return _vz_towards(height, z), abs(height - z) <= VERTICAL_TOLERANCE
 
-    def _keep_height(self, height: Optional[float]) -> float:
-        """vz back to height (true) by a fresh altimeter estimate; 0 without one (never by the GNSS height
-        alone: in the opening the altimeter sees the sill and the estimate lapses, the GNSS height is off)."""
+    def _keep_height(self, height: Optional[float], in_wall: bool) -> float:
+        """vz back to height (true) by a fresh altimeter estimate before the wall; 0 without one (never by the
+        GNSS height alone: it is off by decimetres) and 0 from the frame going into the wall on (in_wall).
+
+        Why in the wall: the altimeter sees the sill there, so the estimate of the vertical GNSS error is
+        held as it was at the wall (clearance.py, `hold`), while the error itself goes on wandering; steering
+        the GNSS height corrected by that held estimate makes the UAV follow the error's drift (realistic
+        benchmark bags: the error moved 0.3-0.5 m within 4 s in a window, and a UAV steered so rose 0.43 m;
+        UAVs hit lintels 0.5-0.75 m above the middle they had centred on). Commanding no vertical speed
+        leaves the height to the autopilot's own velocity hold, which the GNSS error's drift does not move."""
+        if in_wall:
+            return 0.0
         z = self.height_now() if height is not None else None
         return 0.0 if z is None else _vz_towards(height, z)
 
@@ -440,8 +449,9 @@ class LaserPassage:
     def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
                  start: np.ndarray, u: np.ndarray, length: float, height: Optional[float] = None) -> None:
         """Forward until `length` m along u from start, centred on the opening while its edges are seen,
-        and (a UAV) at the height it centred on while the altimeter gives a fresh estimate (the GNSS
-        height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame).
+        and (a UAV) at the height it centred on: by the altimeter's fresh estimate before the wall (the GNSS
+        height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame),
+        by no vertical speed from the frame going into the wall on (`_keep_height`).
 
         Gusts (realistic seed 103: a UAV leaving floor 1 by facade D's window crawled through at 0.3 m/s,
         stopping whenever pushed off the middle, and a gust put it 0.7 m aside onto the edge): the robot
@@ -526,7 +536,7 @@ class LaserPassage:
             v, note = self._pass_velocity(ctl, crossing, lateral, half, to_face, reach, done < clear_at, aligned)
             task.feedback('PASSING', f'through the {kind}: {to_go:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside') + note)
-            self._command(v, heading, msg, self._keep_height(height))
+            self._command(v, heading, msg, self._keep_height(height, crossing.started))
             a.backend.sleep(dt)
 
     def _pass_velocity(self, ctl: OpeningPassage, crossing: '_Crossing', lateral: Optional[float],
