@@ -36,6 +36,10 @@ class Bookkeeping:
                                       params.max_blocked_legs)
         self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
         self.notes: list[str] = []  # log lines of the failure rules, taken by the node (take_notes)
+        # explored layouts (no interior walls known): the room (floor, index) each agent last entered, and
+        # the room whose search found each indoor fire; the way to a fire and out is through that window
+        self.entered: dict[str, tuple[int, Any]] = {}
+        self.fire_rooms: dict[int, tuple[int, Any]] = {}
 
     def on_sent(self, cmd: Command) -> None:
         """The node sent `cmd`: the agent is busy with it until `record`."""
@@ -53,6 +57,12 @@ class Bookkeeping:
             self.last_done[cmd.agent_id] = cmd
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
+                if cmd.task == C.SEARCH_INDOOR and isinstance(cmd.target, tuple) \
+                        and isinstance(cmd.target[1], int):
+                    for i in result["fire_ids"]:
+                        self.fire_rooms.setdefault(int(i), cmd.target)
+            if cmd.task == C.ENTER_BUILDING:
+                self.entered[cmd.agent_id] = cmd.target
             self._count_search(cmd)
             return False
         self.last_done.pop(cmd.agent_id, None)

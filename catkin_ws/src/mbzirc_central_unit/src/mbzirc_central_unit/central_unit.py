@@ -25,7 +25,7 @@ from std_msgs.msg import Header, String
 
 from . import constants as C
 from .goal_timeouts import GoalClock
-from .layout import Layout, load_world
+from .layout import INDOOR_SEARCHES, Layout, explored_layout, load_world
 from .operator import OperatorGate
 from .strategy import Command, Strategy, StrategyParams
 from .world_model import AgentView, FireView, WorldView, fire_kind
@@ -97,7 +97,7 @@ class CentralUnit:
             indoor_floors=[int(f) for f in rospy.get_param("~indoor_floors", list(C.INDOOR_FLOORS))],
             altitudes={str(k): float(v) for k, v in
                        rospy.get_param("~altitudes", dict(C.DEFAULT_ALTITUDES)).items()},
-            layout=self._layout(str(rospy.get_param("~world_file", ""))),
+            layout=self._layout(str(rospy.get_param("~world_file", "")), self._indoor_search()),
             fire_distance=float(rospy.get_param("~fire_distance", C.FIRE_DISTANCE)),
             min_water=float(rospy.get_param("~min_water", C.MIN_WATER)),
             num_ground_fires=int(rospy.get_param("~num_ground_fires", 2)),
@@ -154,15 +154,25 @@ class CentralUnit:
         return out
 
     @staticmethod
-    def _layout(path: str) -> Layout:
+    def _indoor_search() -> str:
+        """`~indoor_search`: plan (the transitional private plan) or explore (rooms = the windows)."""
+        mode = str(rospy.get_param("~indoor_search", "plan"))
+        if mode not in INDOOR_SEARCHES:
+            rospy.logerr("central_unit: ~indoor_search %r is not one of %s: using 'plan'", mode, INDOOR_SEARCHES)
+            return "plan"
+        return mode
+
+    @staticmethod
+    def _layout(path: str, indoor_search: str = "plan") -> Layout:
+        default = explored_layout if indoor_search == "explore" else Layout
         if not path:
-            return Layout()
+            return default()
         try:
             with open(path, encoding="utf-8") as f:
-                return load_world(yaml.safe_load(f))
+                return load_world(yaml.safe_load(f), indoor_search)
         except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as e:
             rospy.logerr("central_unit: cannot read world file %s (%s): using the default layout", path, e)
-            return Layout()
+            return default()
 
     # ---- inputs ----------------------------------------------------------------------------------
     def _on_feed(self, msg: cmsg.AgentDataFeed, agent_id: str) -> None:

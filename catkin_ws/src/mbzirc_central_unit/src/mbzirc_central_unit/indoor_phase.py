@@ -64,7 +64,7 @@ class IndoorPhase(Decider):
                                    ("view", fire.fire_id))
                 return Command(a.agent_id, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
                                f"water on indoor fire {fire.fire_id}, floor {floor}", fire.fire_id)
-            idx = layout.room_for(floor, there)
+            idx = self._room_of(floor, fire, there)
             if idx is None:
                 return None
             return self._to_room(a, floor, idx, rooms[idx], inside, f"to indoor fire {fire.fire_id}")
@@ -80,8 +80,19 @@ class IndoorPhase(Decider):
                            f"searching floor {floor} indoors (room {idx})", (floor, idx))
         return self._to_room(a, floor, idx, room, inside, f"to search room {idx}")
 
+    def _room_of(self, floor: int, fire: FireView, there) -> Optional[int]:
+        """The room to reach a fire through: with an explored layout (no walls known) the room whose search
+        found it, when known (the nearest window may open on the other side of a wall); else the layout's."""
+        found = self.book.fire_rooms.get(fire.fire_id)
+        if self.p.layout.explored and found is not None and found[0] == floor:
+            return found[1]
+        return self.p.layout.room_for(floor, there)
+
     def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:
-        """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire."""
+        """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire; None
+        when the rooms are the windows' (explored: no holder known, the agent faces the fire from its side)."""
+        if self.p.layout.explored:
+            return None
         views = [v for r in self.p.layout.rooms.get(floor, []) for v in r.path]
         near = [v for v in views if math.dist(v[:3], fire.position) <= VIEWPOINT_MAX_DIST]
         return min(near, key=lambda v: math.dist(v[:3], fire.position)) if near else None

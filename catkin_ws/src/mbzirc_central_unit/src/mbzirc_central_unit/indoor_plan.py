@@ -82,9 +82,10 @@ class IndoorPlan:
     inner_walls: list[tuple[float, ...]] = field(default_factory=lambda: list(DEFAULT_INNER_WALLS))
     indoor_holders: list[tuple[float, ...]] = field(default_factory=lambda: list(DEFAULT_INDOOR_HOLDERS))
     rooms: dict[int, list[Room]] = field(default_factory=dict)
+    explored: bool = False   # True: no walls, no holders; one room per window, searched by exploring
 
     def __post_init__(self) -> None:
-        if not self.rooms:
+        if not self.rooms and not self.explored:
             self.rooms = build_rooms(self)
 
     def walls_2d(self, floor: int) -> list[Rect]:
@@ -137,6 +138,22 @@ def build_rooms(plan: IndoorPlan) -> dict[int, list[Room]]:
         else:
             rooms.setdefault(floor, []).append(Room(floor, entry, inner, [(*view, yaw)]))
     return rooms
+
+
+def window_plan(windows: list[tuple[float, ...]]) -> IndoorPlan:
+    """The indoor plan of `~indoor_search explore`: what a team knows (the windows), nothing private.
+
+    One room per window: entered from its entry pose, searched from its inner point facing in (the agents
+    then explore the floor on their laser, mbzirc_agents tasks/explore.py). Without interior walls every
+    straight line indoors counts as clear (the agents' leg guard checks each against the laser), and a
+    fire belongs to the room whose inner point is nearest."""
+    rooms: dict[int, list[Room]] = {}
+    for wx, wy, wz, nx, ny in windows:
+        yaw = facing(nx, ny)
+        inner = (wx - WINDOW_DEPTH * nx, wy - WINDOW_DEPTH * ny, wz)
+        entry = (wx + WINDOW_STANDOFF * nx, wy + WINDOW_STANDOFF * ny, wz, yaw)
+        rooms.setdefault(floor_of(wz), []).append(Room(floor_of(wz), entry, inner, [(*inner, yaw)]))
+    return IndoorPlan(windows=windows, inner_walls=[], indoor_holders=[], rooms=rooms, explored=True)
 
 
 def load_indoor_plan(world: dict[str, Any], windows: list[tuple[float, ...]]) -> IndoorPlan:

@@ -13,7 +13,9 @@ from typing import Any, Optional
 from mbzirc_arena import Arena, arena_from_world
 from mbzirc_arena.c3 import ARENA
 
-from .indoor_plan import IndoorPlan, Rect, Room, load_indoor_plan  # noqa: F401  (Room: the strategy's type)
+from .indoor_plan import IndoorPlan, Rect, Room, load_indoor_plan, window_plan  # noqa: F401  (Room: the strategy's type)
+
+INDOOR_SEARCHES = ("plan", "explore")   # `~indoor_search`: the private plan, or exploring from the windows
 
 Point = tuple[float, float, float]
 
@@ -59,6 +61,11 @@ class Layout:
     def rooms(self) -> dict[int, list[Room]]:
         return self.indoor.rooms
 
+    @property
+    def explored(self) -> bool:
+        """True when the rooms are the windows' (`~indoor_search explore`): no walls, no holders known."""
+        return self.indoor.explored
+
     def walls_2d(self, floor: int) -> list[Rect]:
         return self.indoor.walls_2d(floor)
 
@@ -69,7 +76,17 @@ class Layout:
         return self.indoor.clear_indoors(floor, p, q)
 
 
-def load_world(world: dict[str, Any]) -> Layout:
-    """Layout from a ual_sim world dictionary: its public arena and (transitional) its indoor plan."""
+def explored_layout(arena: Arena = ARENA) -> Layout:
+    """The layout of `~indoor_search explore`: the public arena only (rooms: one per window)."""
+    return Layout(arena=arena, indoor=window_plan(tower_windows(arena)))
+
+
+def load_world(world: dict[str, Any], indoor_search: str = "plan") -> Layout:
+    """Layout from a ual_sim world dictionary: its public arena and, with indoor_search 'plan'
+    (transitional), its indoor plan; with 'explore' nothing private is read."""
+    if indoor_search not in INDOOR_SEARCHES:
+        raise ValueError(f"indoor_search {indoor_search!r} is not one of {INDOOR_SEARCHES}")
     arena = arena_from_world(world)
+    if indoor_search == "explore":
+        return explored_layout(arena)
     return Layout(arena=arena, indoor=load_indoor_plan(world, tower_windows(arena)))

@@ -93,6 +93,10 @@ class Router:
         if not rooms:
             return []
         room = min(rooms, key=lambda r: math.dist(r.inner, a.position))
+        entered = self.book.entered.get(a.agent_id)
+        if self.p.layout.explored and entered is not None and entered[0] == G.floor_of(a.z) \
+                and isinstance(entered[1], int) and entered[1] < len(rooms):
+            room = rooms[entered[1]]    # no walls known: out through the window it came in (in its sight)
         e = room.entry
         back = e[3] + math.pi  # face out while leaving
         # One waypoint per goal: the agents' search_indoor stops at the first waypoint where it knows a

@@ -148,6 +148,10 @@ class WaterDecider(Decider):
         layout = self.p.layout
         if f.kind == C.KIND_FACADE:
             holders = layout.facade_holders
+        elif f.kind == C.KIND_INDOOR and layout.explored:
+            x0, y0, x1, y1, top = layout.arena.building("tower").footprint   # no holder known: in the tower
+            x, y, z = f.position
+            return x0 <= x <= x1 and y0 <= y <= y1 and z <= top
         elif f.kind == C.KIND_INDOOR:
             holders = [h[:3] for h in layout.indoor_holders]
         else:

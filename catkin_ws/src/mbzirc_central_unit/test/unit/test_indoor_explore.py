@@ -1,0 +1,93 @@
+"""~indoor_search explore: the central unit plans indoors from what a team knows (the windows), reads no
+interior wall or indoor holder, and keeps its goals and failure rules working on rooms = windows."""
+import math
+import os
+
+import pytest
+import yaml
+
+from mbzirc_central_unit import constants as C
+from mbzirc_central_unit.command import Command
+from mbzirc_central_unit.layout import explored_layout, load_world
+from mbzirc_central_unit.strategy import Strategy, StrategyParams
+from mbzirc_central_unit.world_model import AgentView, FireView, WorldView
+
+WORLDS = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'ual_sim', 'src', 'ual_sim', 'worlds')
+
+
+def world(name):
+    with open(os.path.join(WORLDS, name), encoding='utf-8') as f:
+        return yaml.safe_load(f)
+
+
+def explored():
+    return Strategy(StrategyParams(layout=explored_layout()))
+
+
+def uav(x, y, z, water=2.0):
+    return AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, x, y, z, ual_state=C.UAL_FLYING_AUTO,
+                     water_level=water, last_seen=0.0)
+
+
+def test_two_floor_plans_give_the_same_explored_layout_and_nothing_private():
+    """The other floor plan's world (other interior walls and indoor holders) changes nothing: they are
+    not read. The plan layout does read them (that is what explore replaces)."""
+    a, b = world('c3_default.yaml'), world('c3_floor_plan_b.yaml')
+    assert load_world(a).inner_walls != load_world(b).inner_walls
+    ea, eb = load_world(a, 'explore'), load_world(b, 'explore')
+    assert ea.inner_walls == [] and ea.indoor_holders == [] and ea.explored
+    assert ea.rooms == eb.rooms
+    windows = {f: len([w for w in ea.windows if round(w[2] / 5.0 - 0.5) == f]) for f in (1, 2)}
+    assert {f: len(ea.rooms[f]) for f in (1, 2)} == windows          # one room per window
+    with pytest.raises(ValueError):
+        load_world(a, 'guess')
+
+
+def test_a_room_is_entered_through_its_window_then_searched_from_just_inside_facing_in():
+    s = explored()
+    room = s.p.layout.rooms[1][0]
+    a = uav(*room.entry[:3])
+    cmd = s.indoor.step(a, 1, None)
+    assert cmd.task == C.ENTER_BUILDING and cmd.target == (1, 0) and cmd.goal["entry"] == room.entry
+    s.on_sent(cmd); s.on_result(cmd, True)
+    a.x, a.y, a.z = room.inner
+    cmd = s.indoor.step(a, 1, None)
+    assert cmd.task == C.SEARCH_INDOOR and cmd.goal["path"] == [room.path[0]]
+    inward = (math.cos(room.path[0][3]), math.sin(room.path[0][3]))
+    assert inward[0] * (room.inner[0] - room.entry[0]) + inward[1] * (room.inner[1] - room.entry[1]) > 0
+
+
+def test_a_found_fire_is_reached_through_the_window_of_the_room_that_found_it_and_left_the_same_way():
+    """Window B's inner point (floor 1) is the nearest to a fire at (17.7, 8.5), but that fire was found
+    from facade C's room: with no wall known, only that room is known to see it."""
+    s = explored()
+    rooms = s.p.layout.rooms[1]
+    c_room = min(range(len(rooms)), key=lambda i: rooms[i].inner[0])          # facade C: west
+    fire = FireView(41, 17.7, 8.5, 6.5, C.KIND_INDOOR)
+    nearest = min(range(len(rooms)), key=lambda i: math.dist(rooms[i].inner, fire.position))
+    assert nearest != c_room
+    enter = s.indoor._to_room(uav(*rooms[c_room].entry[:3]), 1, c_room, rooms[c_room], False, "test")
+    assert enter.task == C.ENTER_BUILDING
+    s.on_sent(enter); s.on_result(enter, True)
+    assert s.book.entered["2"] == (1, c_room)
+    search = Command("2", C.SEARCH_INDOOR, {"floor": 1, "path": list(rooms[c_room].path)}, "test", (1, c_room))
+    s.on_sent(search); s.on_result(search, True, {"fire_ids": [41]})
+    assert s.book.fire_rooms[41] == (1, c_room)
+    # another UAV outside goes to that room's window, not the nearest one's
+    cmd = s.indoor.step(AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, *rooms[c_room].entry[:3],
+                                  ual_state=C.UAL_FLYING_AUTO, water_level=2.0, last_seen=0.0), 1, fire)
+    assert cmd.task == C.ENTER_BUILDING and cmd.target == (1, c_room)
+    # inside, the finder is sent to water it (no holder viewpoint), and leaves by the window it came in
+    inside = uav(16.5, 9.5, 7.5)
+    cmd = s.indoor.step(inside, 1, fire)
+    assert cmd.task == C.EXTINGUISH_INDOOR_FIRE and cmd.goal["fire_id"] == 41
+    out = s.router.exit_path(uav(16.5, 9.5, 7.5, water=0.0))
+    assert math.dist(out[0][:3], rooms[c_room].exit_start) < 1e-6
+
+
+def test_an_indoor_fire_anywhere_in_the_tower_is_a_target_without_holders():
+    s = explored()
+    inside = FireView(43, 21.5, 9.6, 6.5, C.KIND_INDOOR)       # a place no holder of the default world has
+    outside = FireView(44, 5.0, 5.0, 6.5, C.KIND_INDOOR)
+    assert s.water._plausible(inside) and not s.water._plausible(outside)
+    assert s.indoor._viewpoint_of(1, inside) is None            # no holder viewpoint: faced from its side
