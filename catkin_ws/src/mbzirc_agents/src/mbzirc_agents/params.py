@@ -171,6 +171,19 @@ class AgentParams:
     door_inside: List[float] = _param(list(C.UGV_DOOR_INSIDE), 'UGV: x, y just inside the door', lengths=(2,))
     indoor_search_path: List[List[float]] = _param(_points(C.UGV_INDOOR_PATH), 'UGV: x, y[, yaw] of the '
                                                    'indoor viewpoints', lengths=(2, 3))
+    indoor_search: str = _param('plan', "search_indoor: 'plan' follows the goal's path (UGV: and "
+                                '~indoor_search_path) only; \'explore\' then explores the floor on the laser\'s free '
+                                'space (tasks/explore.py; UGV: the door only, no ~indoor_search_path)',
+                                choices=('plan', 'explore'))
+    explore_budget: float = _param(300.0, 's at most of exploring a floor, after the path')
+    explore_headings: int = _param(6, 'headings of a look around on the spot while exploring (thermal camera)')
+    explore_look_time: float = _param(1.5, 's of thermal look at each heading (the frame filter needs > 1 s)')
+    explore_clearance: float = _param(0.8, 'm from every laser return and the outline a viewpoint and its legs '
+                                      'keep')
+    explore_resolution: float = _param(0.25, 'm, cell side of the exploration grid')
+    explore_min_frontier: int = _param(3, 'cells of a frontier at least (fewer: a missed beam, not unseen space)')
+    explore_in_sight: bool = _param(True, 'exploration viewpoints only in straight sight of the first one (a '
+                                    'UAV leaves through the window it came in)')
 
     @classmethod
     def names(cls) -> List[str]:

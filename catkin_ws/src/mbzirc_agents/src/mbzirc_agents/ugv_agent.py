@@ -22,7 +22,8 @@ UGV_SUB_TASKS = {'go_to': (ugv.UgvGoTo, {}), 'move': (ugv.UgvGoTo, {'straight': 
 UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.0,
                 'opening_keep_off': 0.9, 'frame_radius': 0.6,   # its 0.6 m radius in the 2.5 m door
                 'leg_guard_half_width': 0.9, 'leg_guard_stop_distance': 1.1,   # the same radius + margins
-                'wall_clearance': False}   # parked, it does not drift; a back-off aside is a manoeuvre for it
+                'wall_clearance': False,   # parked, it does not drift; a back-off aside is a manoeuvre for it
+                'explore_in_sight': False}  # it explores the whole ground floor through its doorways
 
 
 class UgvAgent(RobotAgent):

@@ -97,6 +97,7 @@ class SearchIndoor(AgentTask):
     def __init__(self, name, agent, **args) -> None:
         super().__init__(name, agent, **args)
         self.passage = LaserPassage(self)
+        self.scans = LegGuard(self)          # its laser scans, for ~indoor_search explore (tasks/explore.py)
 
     def run(self, ud) -> str:
         a = self.agent
@@ -115,6 +116,9 @@ class SearchIndoor(AgentTask):
             found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p.stop_at_first_fire:
                 break
+        if not found and a.p.indoor_search == 'explore':
+            from .explore import Exploration       # from the path's last waypoint on, on sensed free space
+            found = Exploration(self, ud.floor).run()
         self.result['fire_ids'] = found
         self.result['message'] = (f'active indoor fires on floor {ud.floor}: {found}' if found
                                   else f'no indoor fire found on floor {ud.floor}')
@@ -138,13 +142,18 @@ class SearchIndoor(AgentTask):
         for k, y in enumerate(yaws):
             self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/{len(yaws)}')
             a.move_to(self, p[:3], y, 'turning')
-            if self._hot(each):
-                end = a.backend.now() + a.p.confirm_time
-                while not self._fires(floor) and a.backend.now() < end:
-                    self.sleep(0.25)
-            found = self._fires(floor)
+            found = self._look_once(floor, each)
             if found:
                 return found
+        return self._fires(floor)
+
+    def _look_once(self, floor: int, seconds: float) -> list:
+        """One look the way the robot faces: the floor's fire ids once the estimator has a track of a fire
+        the thermal camera saw hot (waiting up to ~confirm_time for it)."""
+        if self._hot(seconds):
+            end = self.agent.backend.now() + self.agent.p.confirm_time
+            while not self._fires(floor) and self.agent.backend.now() < end:
+                self.sleep(0.25)
         return self._fires(floor)
 
     def _hot(self, seconds: float) -> bool:

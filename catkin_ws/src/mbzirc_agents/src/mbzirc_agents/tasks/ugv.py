@@ -64,6 +64,8 @@ class UgvSearchIndoor(SearchIndoor):
         if in_footprint(here, standing_at(here, C.BUILDINGS)):
             nearest = min(range(len(path)), key=lambda i: math.dist(path[i][0][:2], here[:2]))
             back = list(reversed(path[:nearest + 1]))
+            if self.agent.p.indoor_search == 'explore':      # explore from here (tasks/explore.py)
+                back = [(tuple(here[:3]), None)]
             self.feedback('GOING', f'already inside: searching back the way in from waypoint {nearest + 1}')
             return super().run(_UD(ud.floor, back))
         self.feedback('GOING', 'to the entrance')
@@ -77,7 +79,8 @@ class UgvSearchIndoor(SearchIndoor):
         into = math.atan2(ins[1] - out[1], ins[0] - out[0])
         z = self.agent.position()[2]
         pts = [((out[0], out[1], z), into), ((ins[0], ins[1], z), into)]
-        pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p.indoor_search_path]
+        if p.indoor_search != 'explore':       # exploring: from just inside the door on (tasks/explore.py)
+            pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p.indoor_search_path]
         return pts
 
 

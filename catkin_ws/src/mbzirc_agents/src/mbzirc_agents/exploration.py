@@ -1,0 +1,218 @@
+"""Indoor exploration on sensed free space: where to look next inside a floor nobody told the robot about.
+
+Why: a team knows the building's outline, its floors and the approximate places of its windows and door,
+not the interior walls or where the indoor fires are (issue 18). A robot inside a floor therefore builds a
+coarse grid of the floor's outline from its own laser (free along each beam, occupied at its return) and
+goes to the frontier (free space next to space it has not seen) that is nearest along the free space: a
+doorway is a gap in the scan, the free space seen through it is a frontier, so rooms behind interior walls
+are reached through their doorways without knowing where they are.
+
+Rules:
+- the grid covers the footprint of the building the robot is in (public), `resolution` m cells, each
+  unknown, free or occupied; a beam's cells up to its return are free, the return's cell occupied (a
+  return outside the footprint, through a window, frees the cells up to the outline only);
+- an occupied cell stays occupied (a wall does not move; a free cell seen occupied later becomes so);
+- a robot may stand on free cells at least `clearance` from every occupied cell and inside the footprint
+  by `clearance` (the outer walls); the robot's own cell is allowed whatever its clearance (it is there);
+- a frontier cell is such a standable cell with an unknown 4-neighbour; frontier cells that touch form one
+  frontier; one with fewer than `min_frontier` cells is noise (a single missed beam);
+- the next viewpoint is the standable cell of a frontier nearest to the robot along standable cells
+  (breadth-first over 8-neighbours); its path is cut into straight legs, each a line of standable cells
+  (`straight_legs`), so that every leg is one the leg guard checks;
+- `line_of_sight` limits a search to what is in straight sight of its start when a caller asks for it (a
+  UAV in a window's room, which must come back out the same way).
+Pure geometry here (no ROS); the task using it is tasks/explore.py.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
+
+UNKNOWN, FREE, OCCUPIED = 0, 1, 2
+NEIGHBOURS_4 = ((1, 0), (-1, 0), (0, 1), (0, -1))
+NEIGHBOURS_8 = NEIGHBOURS_4 + ((1, 1), (1, -1), (-1, 1), (-1, -1))
+
+Cell = tuple[int, int]
+
+
+class FloorGrid:
+    """What the robot has seen of one floor: unknown / free / occupied cells over the building's footprint.
+
+    Args:
+        bounds: x_min, y_min, x_max, y_max of the footprint (m, arena frame).
+        resolution: m per cell side.
+    """
+
+    def __init__(self, bounds: Sequence[float], resolution: float = 0.25) -> None:
+        self.x0, self.y0, x1, y1 = (float(v) for v in bounds[:4])
+        if x1 <= self.x0 or y1 <= self.y0 or resolution <= 0:
+            raise ValueError(f'bad footprint {tuple(bounds[:4])} or resolution {resolution}')
+        self.res = float(resolution)
+        self.nx = max(1, int(math.ceil((x1 - self.x0) / self.res)))
+        self.ny = max(1, int(math.ceil((y1 - self.y0) / self.res)))
+        self.cells = np.full((self.nx, self.ny), UNKNOWN, dtype=np.int8)
+
+    # ---- cells and points ------------------------------------------------------------------------------
+    def cell(self, x: float, y: float) -> Optional[Cell]:
+        i, j = int(math.floor((x - self.x0) / self.res)), int(math.floor((y - self.y0) / self.res))
+        return (i, j) if 0 <= i < self.nx and 0 <= j < self.ny else None
+
+    def centre(self, c: Cell) -> tuple[float, float]:
+        return self.x0 + (c[0] + 0.5) * self.res, self.y0 + (c[1] + 0.5) * self.res
+
+    # ---- sensing ---------------------------------------------------------------------------------------
+    def add_scan(self, origin: Sequence[float], points: np.ndarray) -> None:
+        """Add one scan's returns (N x 2, arena frame) seen from origin (x, y)."""
+        ox, oy = float(origin[0]), float(origin[1])
+        hits = []
+        for px, py in np.asarray(points, dtype=float).reshape(-1, 2):
+            length = math.hypot(px - ox, py - oy)
+            steps = int(length / (0.5 * self.res))
+            for k in range(steps):
+                c = self.cell(ox + (px - ox) * k / max(steps, 1), oy + (py - oy) * k / max(steps, 1))
+                if c is None:
+                    break          # left the footprint (out through a window): nothing more of this floor
+                if self.cells[c] == UNKNOWN:
+                    self.cells[c] = FREE
+            end = self.cell(px, py)
+            if end is not None:
+                hits.append(end)
+        for c in hits:               # after the rays: a wall seen edge-on is not freed by a neighbouring beam
+            self.cells[c] = OCCUPIED
+
+    # ---- where the robot may stand ---------------------------------------------------------------------
+    def standable(self, clearance: float, here: Optional[Cell] = None) -> np.ndarray:
+        """Boolean grid of the free cells at least clearance from every occupied cell and from the outline."""
+        ok = self.cells == FREE
+        occ = np.argwhere(self.cells == OCCUPIED)
+        ii, jj = np.meshgrid(np.arange(self.nx), np.arange(self.ny), indexing='ij')
+        if len(occ):
+            r = clearance / self.res
+            near = np.zeros_like(ok)
+            for oi, oj in occ:
+                near |= (ii - oi) ** 2 + (jj - oj) ** 2 < r * r
+            ok &= ~near
+        margin = int(math.ceil(clearance / self.res - 0.5))
+        if margin > 0:
+            ok[:margin, :] = ok[-margin:, :] = False
+            ok[:, :margin] = ok[:, -margin:] = False
+        if here is not None:
+            ok[here] = True
+        return ok
+
+    def frontier_cells(self, ok: np.ndarray) -> set:
+        """Standable cells with an unknown 4-neighbour."""
+        out = set()
+        for i, j in np.argwhere(ok):
+            for di, dj in NEIGHBOURS_4:
+                a, b = i + di, j + dj
+                if 0 <= a < self.nx and 0 <= b < self.ny and self.cells[a, b] == UNKNOWN:
+                    out.add((int(i), int(j)))
+                    break
+        return out
+
+    def line_free(self, ok: np.ndarray, a: Cell, b: Cell) -> bool:
+        """True if every cell on the straight line a-b is standable."""
+        n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2 + 1
+        for k in range(n + 1):
+            t = k / n
+            c = (int(round(a[0] + (b[0] - a[0]) * t)), int(round(a[1] + (b[1] - a[1]) * t)))
+            if not ok[c]:
+                return False
+        return True
+
+
+def frontiers(grid: FloorGrid, ok: np.ndarray, min_frontier: int) -> list[set]:
+    """The frontiers (touching frontier cells, 8-neighbours) of at least min_frontier cells."""
+    left = grid.frontier_cells(ok)
+    groups = []
+    while left:
+        seed = left.pop()
+        group, todo = {seed}, [seed]
+        while todo:
+            i, j = todo.pop()
+            for di, dj in NEIGHBOURS_8:
+                c = (i + di, j + dj)
+                if c in left:
+                    left.discard(c)
+                    group.add(c)
+                    todo.append(c)
+        if len(group) >= min_frontier:
+            groups.append(group)
+    return groups
+
+
+def paths_from(ok: np.ndarray, start: Cell) -> dict:
+    """Breadth-first parents over standable cells (8-neighbours) from start."""
+    parent = {start: None}
+    queue = deque([start])
+    nx, ny = ok.shape
+    while queue:
+        i, j = queue.popleft()
+        for di, dj in NEIGHBOURS_8:
+            c = (i + di, j + dj)
+            if 0 <= c[0] < nx and 0 <= c[1] < ny and ok[c] and c not in parent:
+                parent[c] = (i, j)
+                queue.append(c)
+    return parent
+
+
+def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list) -> list:
+    """The cell path cut into the fewest straight legs (greedy: each leg goes as far as a free line does)."""
+    legs, k = [], 0
+    while k < len(cells) - 1:
+        far = k + 1
+        for m in range(len(cells) - 1, k, -1):
+            if grid.line_free(ok, cells[k], cells[m]):
+                far = m
+                break
+        legs.append(cells[far])
+        k = far
+    return legs
+
+
+def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min_frontier: int = 3,
+                   skip: Iterable = (), sight_of: Optional[Sequence[float]] = None) -> Optional[list]:
+    """The legs [(x, y), ...] to the nearest frontier's nearest standable cell (along the free space), or
+    None when no frontier is reachable. skip: (x, y) viewpoints not to choose again (a blocked leg's end);
+    sight_of: only cells in a straight standable line of this point count."""
+    start = grid.cell(here[0], here[1])
+    if start is None:
+        return None
+    ok = grid.standable(clearance, here=start)
+    origin = grid.cell(sight_of[0], sight_of[1]) if sight_of is not None else None
+    banned = {grid.cell(p[0], p[1]) for p in skip}
+    parent = paths_from(ok, start)
+    best = None
+    for group in frontiers(grid, ok, min_frontier):
+        for c in group:
+            if c not in parent or c in banned or c == start:
+                continue
+            if origin is not None and not (ok[origin] and grid.line_free(ok, origin, c)):
+                continue
+            d = _path_length(parent, c)
+            if best is None or d < best[0]:
+                best = (d, c)
+    if best is None:
+        return None
+    cells, c = [], best[1]
+    while c is not None:
+        cells.append(c)
+        c = parent[c]
+    cells.reverse()
+    return [grid.centre(c) for c in straight_legs(grid, ok, cells)]
+
+
+def _path_length(parent: dict, c: Cell) -> float:
+    d = 0.0
+    while parent[c] is not None:
+        p = parent[c]
+        d += math.hypot(c[0] - p[0], c[1] - p[1])
+        c = p
+    return d
+
+
+__all__ = ['FloorGrid', 'frontiers', 'next_viewpoint', 'straight_legs', 'UNKNOWN', 'FREE', 'OCCUPIED']

@@ -1,0 +1,120 @@
+"""Exploring a floor inside (search_indoor with ~indoor_search explore): look around, go to the nearest
+frontier of the sensed free space, look around again, until a fire is found, nothing is left, or the time
+budget is spent; then back the way it came when no fire was found.
+
+Why: the interior walls and the indoor fire places are not known before the trial (issue 18); the robot's
+laser shows the free space and the doorways (gaps in the scan), its thermal camera the fires (found by the
+fire detector and put on /estimated_objects by the estimator, as on any search). The grid and the choice of
+the next viewpoint are exploration.py's; this is the task's use of them.
+
+Rules:
+- at every viewpoint (the search path's last waypoint first) the robot turns on the spot through
+  ~explore_headings headings, looking with the thermal camera at each (`SearchIndoor._hot`) and adding the
+  laser scans of the look to the floor's grid;
+- the legs to the next viewpoint are straight lines of the grid's free cells, each the sub-task `move`
+  (UAV: indoor go_to, UGV: straight drive), both with the leg guard (leg_guard.py), a doorway across one
+  passed guided by the laser (passage.LaserPassage.doorway) as on a planned search path: a leg the laser finds blocked holds the robot, and that viewpoint is not chosen
+  again (the grid has the return that blocked it from the next look on);
+- ~explore_in_sight (UAVs: they leave through the window they came in by a straight leg) keeps the
+  viewpoints in straight sight of the first one;
+- the exploration ends after ~explore_budget s; without a fire the robot goes back along its viewpoints to
+  the first one (legs it has travelled), where the caller's way out starts.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from mbzirc_arena.buildings import standing_at
+
+from .. import constants as C
+from ..agent_task import TaskError
+from ..exploration import FloorGrid, next_viewpoint
+from ..leg_guard import LegGuard
+
+
+def footprint_here(here) -> Optional[tuple]:
+    """x_min, y_min, x_max, y_max of the (public) footprint of the building the robot stands in."""
+    b = standing_at(here, C.BUILDINGS)
+    return tuple(b[:4]) if b is not None else None
+
+
+class Exploration:
+    """One exploration of the floor the robot is on, run by a SearchIndoor task (`task`)."""
+
+    def __init__(self, task, floor: int) -> None:
+        self.task, self.agent, self.floor = task, task.agent, floor
+        self.scans: LegGuard = task.scans     # the task's laser scans (leg_guard.LegGuard.points)
+        here = self.agent.position()
+        bounds = footprint_here(here)
+        if bounds is None:
+            raise TaskError(f'exploring floor {floor}: ({here[0]:.1f}, {here[1]:.1f}) is in no building')
+        self.grid = FloorGrid(bounds, self.agent.p.explore_resolution)
+        self.start = tuple(here[:3])
+        self.visited: list = [self.start]
+        self.skip: list = []
+
+    def run(self) -> list:
+        """Fire ids found on the floor (empty: none within the budget)."""
+        a, p = self.agent, self.agent.p
+        end = a.backend.now() + p.explore_budget
+        sight = self.start if p.explore_in_sight else None
+        while True:
+            found = self.look_around()
+            if found or a.backend.now() >= end:
+                break
+            legs = next_viewpoint(self.grid, a.position(), p.explore_clearance, p.explore_min_frontier,
+                                  self.skip, sight)
+            if legs is None:
+                a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore')
+                break
+            if not self.go(legs):
+                continue
+        if not found:
+            self.go_back()
+        return found
+
+    def look_around(self) -> list:
+        """Turn through the headings on the spot; thermal look and laser scan at each. Fire ids found."""
+        a, n = self.agent, max(1, int(self.agent.p.explore_headings))
+        here = a.position()
+        for k in range(n):
+            yaw = here[3] + 2 * math.pi * k / n
+            self.task.feedback('EXPLORING', f'floor {self.floor}: looking {k + 1}/{n}')
+            a.move_to(self.task, here[:3], yaw, 'turning')
+            self.add_scan()
+            found = self.task._look_once(self.floor, a.p.explore_look_time)
+            self.add_scan()
+            if found:
+                return found
+        return []
+
+    def add_scan(self) -> None:
+        points = self.scans.points()
+        if points is not None:
+            self.grid.add_scan(self.agent.position()[:2], points)
+
+    def go(self, legs: list) -> bool:
+        """Along the legs (guarded); False (the end skipped from now on) when one is blocked."""
+        z = self.start[2]
+        for i, (x, y) in enumerate(legs):
+            try:
+                self.task.feedback('EXPLORING', f'floor {self.floor}: to ({x:.1f}, {y:.1f}) leg {i + 1}/{len(legs)}')
+                on_to = self.task.passage.doorway((x, y, z))     # through a doorway across it, guided
+                self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
+            except TaskError:
+                self.skip.append(legs[-1])
+                self.add_scan()
+                return False
+            self.visited.append((x, y, z))
+        return True
+
+    def go_back(self) -> None:
+        """Back along the visited points (legs it travelled) to where the exploration started."""
+        here = self.agent.position()
+        back = list(reversed(self.visited))
+        while back and math.dist(back[0][:2], here[:2]) <= self.agent.p.position_tolerance:
+            back.pop(0)
+        for q in back:
+            self.task.feedback('EXPLORING', f'floor {self.floor}: back to where the search started')
+            self.task.call_task_or_raise('move', {'waypoint': (tuple(q), None)})

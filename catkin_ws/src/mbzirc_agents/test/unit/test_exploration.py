@@ -1,0 +1,107 @@
+"""exploration.py: a robot that knows only the tower's outline finds every room of a floor through its
+doorways on its own laser, whatever the interior walls (two floor plans, neither given to it)."""
+import math
+
+import numpy as np
+import pytest
+
+from laser_world import ANGLE_MIN, INC, cast
+from mbzirc_agents.exploration import FREE, OCCUPIED, UNKNOWN, FloorGrid, next_viewpoint
+
+OUTLINE = (11.4, 6.7, 24.2, 19.5)     # the tower's public footprint
+T = 0.2
+
+
+def outer_walls(door=(13.0, 15.5)):
+    x0, y0, x1, y1 = OUTLINE
+    return [(x0, y1 - T, x1, y1), (x0, y0, door[0], y0 + T), (door[1], y0, x1, y0 + T),
+            (x0, y0, x0 + T, y1), (x1 - T, y0, x1, y1)]
+
+
+# plan A: a wall x = 17.7..17.9 with a doorway at y 10-12, a wall y = 15..15.2 west of it, doorway x 13.5-15.5
+PLAN_A = [(17.7, 6.9, 17.9, 10.0), (17.7, 12.0, 17.9, 19.3), (11.6, 15.0, 13.5, 15.2), (15.5, 15.0, 17.7, 15.2)]
+# plan B: other rooms: a wall y = 12.0..12.2 across with a doorway at x 20-22, a wall x = 15.0..15.2 north
+# of it with a doorway at y 16-18
+PLAN_B = [(11.6, 12.0, 20.0, 12.2), (22.0, 12.0, 24.0, 12.2), (15.0, 12.2, 15.2, 16.0), (15.0, 18.0, 15.2, 19.3)]
+
+
+def scan_points(here, walls):
+    r = cast(here, 0.0, walls)
+    a = ANGLE_MIN + INC * np.arange(len(r))
+    ok = np.isfinite(r) & (r < 25.0)
+    return np.stack([here[0] + r[ok] * np.cos(a[ok]), here[1] + r[ok] * np.sin(a[ok])], axis=1)
+
+
+def explore(walls, start, steps=40, clearance=0.8, sight=False):
+    """Teleporting robot: look, go to the next viewpoint (checking no leg crosses a wall), repeat."""
+    grid = FloorGrid(OUTLINE, 0.25)
+    here, visited = tuple(start), [tuple(start)]
+    for _ in range(steps):
+        grid.add_scan(here, scan_points(here, walls))
+        legs = next_viewpoint(grid, here, clearance, 3, (), start if sight else None)
+        if legs is None:
+            break
+        for leg in legs:
+            assert not crosses(here, leg, walls), (here, leg)
+            here = leg
+            visited.append(here)
+    return grid, visited
+
+
+def crosses(p, q, walls, half=0.3):
+    """True if the segment p-q comes within `half` of a wall box (sampled)."""
+    for k in range(51):
+        x, y = p[0] + (q[0] - p[0]) * k / 50, p[1] + (q[1] - p[1]) * k / 50
+        for x0, y0, x1, y1 in walls:
+            if x0 - half < x < x1 + half and y0 - half < y < y1 + half:
+                return True
+    return False
+
+
+def seen(visited, spot, walls):
+    """True if some visited point has a free straight line to spot (it would see a fire there)."""
+    return any(not crosses(v, spot, walls, half=0.0) for v in visited)
+
+
+@pytest.mark.parametrize('plan, fires', [
+    (PLAN_A, [(17.5, 8.5), (18.1, 16.5)]),                       # the default world's holder places
+    (PLAN_B, [(14.8, 17.0), (23.8, 9.0), (20.0, 18.9)]),         # places of another floor plan
+])
+def test_from_the_door_every_room_is_reached_through_its_doorway(plan, fires):
+    walls = outer_walls() + plan
+    grid, visited = explore(walls, (14.25, 7.8))
+    free = np.count_nonzero(grid.cells == FREE)
+    assert free * 0.25 ** 2 > 0.85 * (12.4 * 12.4 - 6), free          # nearly the whole floor seen free
+    for spot in fires:
+        assert seen(visited, spot, walls), (spot, visited)
+
+
+def test_in_sight_stays_in_the_room_of_the_window():
+    """A UAV in through facade C's window (plan A): only its room, nothing behind a doorway."""
+    walls = outer_walls() + PLAN_A
+    start = (13.1, 12.5)
+    _, visited = explore(walls, start, sight=True)
+    assert len(visited) > 1
+    for v in visited:
+        assert 11.6 < v[0] < 17.7 and 6.9 < v[1] < 15.0, v            # the south-west room
+        assert not crosses(start, v, walls, half=0.0)
+
+
+def test_an_occupied_cell_stays_occupied_and_a_window_frees_only_the_outline():
+    grid = FloorGrid(OUTLINE, 0.5)
+    grid.add_scan((15.0, 10.0), np.array([[17.0, 10.0]]))
+    assert grid.cells[grid.cell(17.0, 10.0)] == OCCUPIED
+    grid.add_scan((15.0, 10.0), np.array([[19.0, 10.0]]))           # a later beam through it
+    assert grid.cells[grid.cell(17.0, 10.0)] == OCCUPIED
+    grid.add_scan((15.0, 10.0), np.array([[15.0, 30.0]]))           # out through a window: to the outline
+    assert grid.cells[grid.cell(15.0, 19.2)] == FREE
+    assert grid.cells[grid.cell(12.0, 18.0)] == UNKNOWN
+
+
+def test_nothing_left_to_explore_is_none_and_bad_bounds_are_refused():
+    walls = [(11.4, 6.7, 24.2, 6.9), (11.4, 19.3, 24.2, 19.5), (11.4, 6.7, 11.6, 19.5), (24.0, 6.7, 24.2, 19.5)]
+    grid, visited = explore(walls, (17.8, 13.1))
+    assert next_viewpoint(grid, visited[-1], 0.8) is None
+    with pytest.raises(ValueError):
+        FloorGrid((1.0, 1.0, 0.0, 2.0))
+    assert next_viewpoint(grid, (0.0, 0.0), 0.8) is None               # outside the footprint
