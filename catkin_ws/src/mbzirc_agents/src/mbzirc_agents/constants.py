@@ -58,6 +58,13 @@ RETURN_HOME_TIMEOUT = 60.0
 REGION_MARGIN = 1.0             # m added around every reserved box
 REGION_WAIT_TIMEOUT = 60.0      # s a go-to waits for its region before giving up
 HOLD_HALF_SIZE = 1.0            # half side of the box held around a hovering UAV
+# m per axis a team allows for the error of one robot's reported pose (pose_error_boxes.py): standard
+# single-frequency GNSS (the trial penalised RTK) is off by about a metre horizontally (some 0.7 m per axis,
+# 1 sigma, wandering slowly); vertically the UAL's height (GNSS fused with a barometer) by about half a metre
+# between two robots nearby. The central unit's transit altitudes are 2 x (HOLD_HALF_SIZE + POSE_ERROR_MARGIN_Z)
+# apart, so that UAVs crossing at their own altitudes do not wait for each other. A team on RTK: a few cm
+POSE_ERROR_MARGIN = 0.75
+POSE_ERROR_MARGIN_Z = 0.5
 POSITION_TOLERANCE = 0.2        # m, a go-to has arrived (the UAL stops within 0.1 m)
 YAW_TOLERANCE = 0.15            # rad
 FACADE_STANDOFF = 2.0           # m in front of a facade fire holder

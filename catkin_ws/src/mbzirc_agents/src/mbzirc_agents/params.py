@@ -50,6 +50,10 @@ class AgentParams:
     region_margin: float = _param(C.REGION_MARGIN, 'm added around the box reserved for each flight leg')
     region_timeout: float = _param(C.REGION_WAIT_TIMEOUT, 's a motion waits for its region')
     hold_half_size: float = _param(C.HOLD_HALF_SIZE, 'm, half side of the box a hovering UAV holds')
+    pose_error_margin: float = _param(C.POSE_ERROR_MARGIN, 'm added in x and y on each side of every box reserved '
+                                      'in the air, for the error of the reported pose (pose_error_boxes.py)')
+    pose_error_margin_z: float = _param(C.POSE_ERROR_MARGIN_Z, 'm added in z on each side of every reserved box, '
+                                        'for the error of the reported height')
     step_aside_max: float = _param(4.0, 'm, longest step a hovering UAV takes out of another UAV\'s box when '
                                    'the region manager breaks a deadlock (region_yield.py)')
     step_aside_min_z: float = _param(2.0, 'm, lowest height such a step goes down to')
@@ -59,14 +63,16 @@ class AgentParams:
     max_vertical_speed: float = _param(1.2, 'm/s, vertical (read by no task yet: the UAL limits the climb rate)')
     tank_capacity: float = _param(2.0, 'L, a full tank (refilled means 95 % of it)')
     water_empty: float = _param(0.05, 'L under which the tank is empty')
-    cruise_altitude: float = _param(3.0, 'm go_home_and_refill climbs to at least, before flying home')
+    cruise_altitude: float = _param(3.5, 'm go_home_and_refill climbs to at least, before flying home: its boxes '
+                                    '(grown by the pose error) then clear the parked UAVs\' (pose_error_boxes.py)')
     parked_half_size: float = _param(0.75, 'm: a landed UAV keeps the box x, y +- this, z 0..parked_height')
-    parked_height: float = _param(2.0, 'm, top of the parked box above the UAV')
+    parked_height: float = _param(2.0, 'm, top of the parked box above the ground')
     refill_timeout: float = _param(60.0, 's waiting at home for a full tank / a new blanket')
     reland_after: float = _param(20.0, 's landed at home without the reset before landing on the pad again '
                                        '(the GNSS landing may miss it)')
     reland_attempts: int = _param(2, 'landings again on the pad before the last ~refill_timeout wait (0: none)')
-    reland_height: float = _param(2.0, 'm of the take-off before landing on the pad again')
+    reland_height: float = _param(3.5, 'm of the take-off before landing on the pad again (its hold box clears '
+                                  'the neighbours\' parked boxes, as ~cruise_altitude)')
     home_landing_offset: float = _param(0.5, "m off its pad's centre a UAV aims its landing, away from the other "
                                         "UAVs' pads (tasks/uav_motion.landing_spot): about the GNSS error of one "
                                         'fix, well inside HOME_PAD_RADIUS (1.5 m); 0: the centre')

@@ -26,19 +26,21 @@ STEP_CLEARANCE = 0.3      # m past the box's face, beyond the hover box's half s
 STEP_SAMPLES = 0.25       # m between the points of a step checked against the walls
 
 
-def step_aside_targets(p: Sequence[float], hold_half: float, box: Box, arena: Sequence[float],
+def step_aside_targets(p: Sequence[float], hold_half, box: Box, arena: Sequence[float],
                        buildings: Sequence[Sequence[float]], clearance: float, min_z: float,
                        max_step: float) -> List[np.ndarray]:
-    """The places (x, y, z) whose hover box is out of `box`, reachable from p by one straight step along
-    an axis under the rules above, the shortest first (ties: x, y, z; towards the box's min side first)."""
+    """The places (x, y, z) whose hover box (half sides `hold_half`: one number, or x, y, z as the manager
+    holds it, grown by the pose error) is out of `box`, reachable from p by one straight step along an axis
+    under the rules above, the shortest first (ties: x, y, z; towards the box's min side first)."""
     here = np.asarray(p[:3], dtype=float)
     lo, hi = np.asarray(box[0], dtype=float), np.asarray(box[1], dtype=float)
-    reach = hold_half + STEP_CLEARANCE
-    bounds_lo = np.array([arena[0] + hold_half, arena[1] + hold_half, max(arena[2] + hold_half, min_z)])
-    bounds_hi = np.array([arena[3] - hold_half, arena[4] - hold_half, arena[5] - hold_half])
+    half = np.broadcast_to(np.asarray(hold_half, dtype=float), (3,))
+    reach = half + STEP_CLEARANCE
+    bounds_lo = np.array([arena[0] + half[0], arena[1] + half[1], max(arena[2] + half[2], min_z)])
+    bounds_hi = np.array([arena[3] - half[0], arena[4] - half[1], arena[5] - half[2]])
     found = []
     for axis in range(3):
-        for side, value in ((0, lo[axis] - reach), (1, hi[axis] + reach)):
+        for side, value in ((0, lo[axis] - reach[axis]), (1, hi[axis] + reach[axis])):
             target = here.copy()
             target[axis] = value
             length = abs(value - here[axis])

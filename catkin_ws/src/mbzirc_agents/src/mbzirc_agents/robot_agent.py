@@ -34,6 +34,7 @@ from .agent import Agent
 from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
 from .pose_source import NONE, PoseSource
+from .pose_error_boxes import grown, pose_error_pad
 from .region_yield import STEP_LABEL, step_aside_targets
 
 
@@ -603,8 +604,14 @@ class RobotAgent(Agent):
             setattr(req, name, point)
         return req
 
+    def pose_error_pad(self, label: str) -> np.ndarray:
+        """m (x, y, z) our box `label` is grown by on each side for the error of our reported pose."""
+        return pose_error_pad(label, self.p.pose_error_margin, self.p.pose_error_margin_z)
+
     def _ask(self, label: str, box: Box) -> tuple:
-        """One ask_for_region: (granted, why not); a granted box is remembered in `held`."""
+        """One ask_for_region of box grown by our pose error (pose_error_boxes.py): (granted, why not); a
+        granted box is remembered in `held` as the manager holds it."""
+        box = grown(box, self.pose_error_pad(label))
         try:
             if not self.ask_srv(self._region_request(label, box)).success:
                 return False, 'occupied by another agent'
@@ -712,7 +719,9 @@ class RobotAgent(Agent):
         return ''
 
     def _step_targets(self, box: Box) -> list:
-        return step_aside_targets(self.position(wait=0.0), self.p.hold_half_size, box, self.arena, C.BUILDINGS,
+        # the hover box as the manager will hold it at the target: grown by our pose error
+        hold_half = self.p.hold_half_size + self.pose_error_pad('hold')
+        return step_aside_targets(self.position(wait=0.0), hold_half, box, self.arena, C.BUILDINGS,
                                   self.p.building_clearance, self.p.step_aside_min_z, self.p.step_aside_max)
 
     def _step_aside(self, task: AgentTask, winner: str, label: str, box: Box) -> bool:
@@ -809,7 +818,8 @@ class RobotAgent(Agent):
         self._last_park_try = now
         p, h = self.position(wait=0.0), self.p.parked_half_size
         p = (*self.ground_anchor(p), p[2])
-        box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, p[2] + self.p.parked_height))
+        # up to parked_height above the ground it stands on, not above its reported (GNSS) height
+        box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, self.arena[2] + self.p.parked_height))
         self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
 
     def _on_cost(self, req: Any) -> GetCostToGoToResponse:

@@ -71,7 +71,9 @@ LEG_BLOCKED_BACKOFF_MAX = 60.0
 MAX_BLOCKED_LEGS = 3
 # 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is probably out
 NOT_SEEN_HOT_LIMIT = 2
-# Transit altitude per UAV id: each UAV flies outside the building at its own altitude.
-DEFAULT_ALTITUDES = {"1": 4.0, "2": 6.0, "3": 8.0}
+# Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 3 m apart: the agents'
+# boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of the reported height,
+# mbzirc_agents pose_error_boxes.py), so that UAVs crossing at their own altitudes need not wait for each other
+DEFAULT_ALTITUDES = {"1": 4.0, "2": 7.0, "3": 10.0}
 ALTITUDE_BASE = 4.0
-ALTITUDE_STEP = 2.0
+ALTITUDE_STEP = 3.0

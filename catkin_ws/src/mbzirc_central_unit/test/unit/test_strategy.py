@@ -215,8 +215,8 @@ def test_uavs_take_the_ground_floor_indoors_when_the_ugv_is_gone():
 
 def test_low_tank_refills_before_a_new_fire_job():
     s = Strategy()
-    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, -3.0, 20.0, 5.5, ual_state=C.UAL_FLYING_AUTO,
-                  water_level=0.5, last_seen=0.0)
+    a = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, -3.0, 20.0, s.altitude("2") - 0.5,   # near its own altitude
+                  ual_state=C.UAL_FLYING_AUTO, water_level=0.5, last_seen=0.0)
     w = WorldView(0.0, {"2": a}, {7: FireView(7, 24.2, 8.2, 8.25, C.KIND_FACADE)})
     cmd = s.decide(w)[0]
     assert cmd.task == C.GO_HOME_AND_REFILL
