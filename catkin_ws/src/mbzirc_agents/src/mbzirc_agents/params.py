@@ -149,6 +149,10 @@ class AgentParams:
     soak_fraction: float = _param(0.25, 'share of the water that made an indoor fire read cold pumped on, aim '
                                   'frozen, before its cold check (a fire no longer seen may still burn)')
     soak_min_time: float = _param(1.0, 's at least of that soak')
+    out_contrast: float = _param(2.0, 'deg C: an indoor fire is cold when its locked hot area reads no more than '
+                                 'this above its wall in the raw thermal image (the noise level of a mean over '
+                                 'its pixels, thermal_contrast.py)')
+    thermal_period: float = _param(0.2, 's at least between the raw thermal frames measured while watering')
     top_up_max_std: float = _param(1.0, 'm: a track is well localised for a top-up when its position std is '
                                         'at most this (above the estimator\'s ~pose_std floor, 0.7 m)')
     building_clearance: float = _param(1.5, 'm kept from the buildings by planned paths')

@@ -18,6 +18,8 @@ from uav_abstraction_layer.srv import GoToWaypointResponse, LandResponse, TakeOf
 
 from shared_regions_manager.core import RegionManager
 
+import fake_thermal
+
 
 class FakeUal:
     def __init__(self, backend, pos=(0.0, 0.0, 0.0), speedup=4.0, regions=None):
@@ -41,6 +43,8 @@ class FakeUal:
         self.regions = regions or RegionManager()
         self.waypoints = []
         self.follow_velocity = False     # opt-in: fly the agent's ual/set_velocity commands (0.3 s each)
+        self.thermal = None              # opt-in: () -> a raw thermal frame (fake_thermal.py), sent at 10 Hz
+        self._thermal_time = -np.inf
         self._vel_seen = 0
         self._alt_time = -np.inf
         self.lock = threading.Lock()
@@ -142,6 +146,9 @@ class FakeUal:
                 m.header.stamp = rospy.Time.from_sec(now)
                 m.range = height if height >= 0.05 or not np.isfinite(height) else -np.inf
                 subs['altimeter'](m)
+            if self.thermal is not None and now - self._thermal_time >= 0.1 - 1e-9:
+                self._thermal_time = now
+                fake_thermal.publish(self.be, self.thermal())
             self.be.clock.sleep(dt)
 
 

@@ -8,6 +8,7 @@ import pytest
 from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList, TakeOffGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
+import fake_thermal
 from fake_backend import FakeBackend
 from fake_ual import start_uav, stop_agent
 from mbzirc_agents import constants as C
@@ -19,7 +20,7 @@ FIRE = (4.0, 0.0, 6.5)      # the fire (track and truth); the UAV waters it from
 class Scene:
     """A UAV in the air, one indoor fire track, a thermal camera answering from a script."""
 
-    def __init__(self, hot_until=0.0, num_updates=50, std=0.2):
+    def __init__(self, hot_until=0.0, num_updates=50, std=0.2, params=None):
         self.be = FakeBackend()
         self.statuses = []
         self.hot_until = hot_until
@@ -27,7 +28,12 @@ class Scene:
         self.threads = ()            # the scene's own threads (objects with a `stop` flag), stopped with it
         self.be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
         self.be.handlers['/set_object_status'] = lambda r: self.statuses.append(r.object_status) or type('R', (), {})()
-        self.agent, self.ual = start_uav(self.be, {'check_fire_time': 1.0, 'top_up_time': 1.0}, speedup=2.0)
+        self.agent, self.ual = start_uav(self.be, {'check_fire_time': 1.0, 'top_up_time': 1.0, **(params or {})},
+                                          speedup=2.0)
+        # the raw thermal image follows the script: the fire far over its wall while hot, at the wall's level
+        # (out) when cold; tests of a fire that fades out of the detector's sight set their own
+        rng = np.random.default_rng(1)
+        self.ual.thermal = lambda: fake_thermal.fire_frame(60.0 if self.hot() else 0.0, rng=rng)
         s = self.be.servers['take_off_action']
         s.send(TakeOffGoal(height=6.5))
         assert s.wait(10) == 'succeeded'
@@ -45,10 +51,10 @@ class Scene:
             return False
         return self.pumping_since is None or self.be.clock.now() - self.pumping_since < self.hot_until
 
-    def extinguish(self):
+    def extinguish(self, timeout=30):
         s = self.be.servers['extinguish_indoor_fire_action']
         s.send(ExtinguishIndoorFireGoal(fire_id=7))
-        assert s.wait(30) in ('succeeded', 'aborted')
+        assert s.wait(timeout) in ('succeeded', 'aborted')
         return s
 
     def close(self):
@@ -479,3 +485,63 @@ def test_a_fire_that_stops_showing_before_it_is_out_is_soaked_on_a_frozen_aim(sc
         f'reported out after {cam.received:.2f} s of water of {cam.need:.2f}: {s.result.message}'
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert sc.statuses == [C.STATUS_EXTINGUISHED]
+
+
+class FadingFire:
+    """The scene's fire as water puts it out: `need` L (all the water goes in), a raw contrast to its wall of
+    `heat` deg C untouched that fades in proportion to the water still missing, on a wall at `wall` deg C (a
+    sun-heated one with a `gradient` across the frame, the camera `offset` off, pixel `noise`), and a detector
+    that reports it only while that contrast is over `seen_share` of its untouched heat (ideal missions: fires
+    that fill the close view stopped being reported at 60-85 % watered)."""
+
+    def __init__(self, sc, need, start_water, heat=60.0, seen_share=0.35, wall=31.0, gradient=0.0, offset=0.0,
+                 noise=0.5, missing_at_least=0.0):
+        self.sc, self.need, self.heat, self.seen_share = sc, need, heat, seen_share
+        self.missing_at_least = missing_at_least     # share of the heat water never removes (a fire it misses)
+        sc.ual.water = self.start_water = start_water
+        rng = np.random.default_rng(3)
+        sc.hot = lambda: self.contrast() > seen_share * heat
+        sc.ual.thermal = lambda: fake_thermal.fire_frame(self.contrast(), wall=wall, gradient=gradient,
+                                                         offset=offset, noise=noise, rng=rng)
+
+    def progress(self):
+        return min(1.0, (self.start_water - self.sc.ual.water) / self.need)
+
+    def contrast(self):
+        return self.heat * max(1.0 - self.progress(), self.missing_at_least)
+
+
+def test_a_fire_fading_out_of_the_detectors_sight_is_watered_until_it_reads_at_its_walls_level(scenes):
+    """Issue 17 (ideal missions: fires judged out at 85 % and 98.5 % watered): the detector stops reporting the
+    fire at 55 % watered while it still stands 45 degC over its wall; before, its silence started the soak
+    and the cold check, and the fire was reported out before it had its water (next test). Now cold is judged
+    on the raw thermal image (the locked fire at ~out_contrast over its wall): out only once it had all its
+    water."""
+    sc = scenes(hot_until=1.0)
+    fire = FadingFire(sc, need=10.0, start_water=14.0, heat=100.0, seen_share=0.45)
+    s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
+
+
+def test_with_a_cold_threshold_at_the_detectors_contrast_the_same_fire_is_judged_out_too_early(scenes):
+    """The test above can fail: judged cold about where the detector loses the fire (out_contrast 30 degC),
+    the soak and the cold check end before the fire had its water, as with the detector's silence before."""
+    sc = scenes(hot_until=1.0, params={'out_contrast': 30.0})
+    fire = FadingFire(sc, need=10.0, start_water=14.0, heat=100.0, seen_share=0.45)
+    s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert fire.progress() < 1.0
+
+
+def test_a_fire_still_warm_on_a_noisy_sun_heated_wall_is_never_judged_out(scenes):
+    """Water that never reaches the fire (it keeps 4 degC over its wall: 52 degC, 8 degC warmer on one side
+    of the frame, the camera 2 degC off, pixel noise 1 degC): the detector lost it long ago, the raw image
+    still sees it: the tank runs dry and it is left for a top-up, never reported out."""
+    sc = scenes(hot_until=1.0)
+    FadingFire(sc, need=2.0, start_water=4.0, wall=52.0, gradient=8.0, offset=2.0, noise=1.0,
+               missing_at_least=4.0 / 60.0)
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and not s.result.extinguished, s.result.message
+    assert 'left for a top-up' in s.result.message
+    assert sc.statuses == []

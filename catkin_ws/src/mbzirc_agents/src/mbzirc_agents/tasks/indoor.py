@@ -10,6 +10,8 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 from mbzirc_arena.yaw import wrap_angle
+from rospy.numpy_msg import numpy_msg
+from std_msgs.msg import Float64MultiArray
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
@@ -20,6 +22,7 @@ from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tan
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
+from .thermal_contrast import FireContrast
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
@@ -28,6 +31,7 @@ AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
 AIM_MAX_AGE = 0.5          # s: an older detection no longer turns the robot while it pumps
 FROZEN_HEIGHT_STEP = 0.02  # m: a frozen aim's height set-point is re-sent when it moved this much
+RAW_THERMAL_TOPIC = 'teraranger_evo_thermal/raw_temp_array'   # the thermal camera's 32 x 32 deg C
 
 
 class Sighting(NamedTuple):
@@ -191,11 +195,12 @@ class ExtinguishIndoorFire(AgentTask):
     seed 108: 2 L shot at each floor-1/2 fire, the fires left at 13-91 %).
 
     When it is out (tasks/cold_check.py): seen hot from the watering pose, then cold C.COLD_CHECKS times in a
-    row with water flowing at it (the tank level dropping) from that pose, the jet's height on the hot spot
-    as last seen (a UAV whose last sighting put the fire beyond the height it could reach waters on, but a
-    cold answer then says "out of view", not "out"). A fire never seen hot from there
-    is never reported out: the goal fails with why, and the central unit tries again or gives it to
-    another robot."""
+    row with water flowing at it (the tank level dropping) from that pose, cold judged on the raw thermal image
+    (tasks/thermal_contrast.py: the locked fire no more than ~out_contrast above its wall, not the detector's
+    silence) and soaked (~soak_fraction) before, the jet's height on the hot spot as last seen (a UAV whose
+    last sighting put the fire beyond the height it could reach waters on, but a cold answer then says "out
+    of view", not "out"). A fire never seen hot from there is never reported out: the goal fails with why,
+    and the central unit tries again or gives it to another robot."""
     INPUT_KEYS = ['fire_id']
 
     def __init__(self, name, agent, **args) -> None:
@@ -206,6 +211,9 @@ class ExtinguishIndoorFire(AgentTask):
         self.watering_z: Optional[float] = None          # the height the watering pose was reached at
         self.on_jet = True                               # the last sighting's height correction was all sent
         self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
+        self.contrast = FireContrast(agent.backend.now, agent.p.out_contrast, agent.p.thermal_period)
+        self.iface.add_subscriber(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
+                                  lambda msg: self.contrast.on_frame(msg.data))
 
     def _wall_points(self) -> Optional[np.ndarray]:
         """The laser's returns for the wall clearance; None when it is off or without a fresh scan (said)."""
@@ -356,6 +364,7 @@ class ExtinguishIndoorFire(AgentTask):
             raise TaskError('tank empty')
         fire = np.array(fire_position(a, ud.fire_id))
         self.sensed.clear()                              # a previous run's detections aim nothing
+        self.contrast.clear()                            # nor its locked fire
         self.aim_z, self.watering_z, self.on_jet = None, None, True
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
@@ -404,10 +413,12 @@ class ExtinguishIndoorFire(AgentTask):
         A pump that moves no water for
         cold_check.NO_FLOW_TIME fails the goal.
 
-        Once seen hot, the first cold answer starts a soak (cold_check.Soak: ~soak_fraction of the water that
-        made the fire read cold, at least ~soak_min_time), and only then do cold answers count. While the fire
-        reads cold the aim is frozen (`_freeze_aim`): the detector no longer reports it, so nothing corrects
-        the aim, and re-deriving it from GNSS moves the jet by the drift of the GNSS error.
+        Hot or cold (`_hot`): hot while the detector sees the fire, else the locked fire's contrast to its wall
+        in the raw thermal image (tasks/thermal_contrast.py), cold at ~out_contrast. Once seen hot, the first
+        cold answer starts a soak (cold_check.Soak: ~soak_fraction of the water that made the fire read cold,
+        at least ~soak_min_time), and only then do cold answers count. While the detector no longer sees the
+        fire the aim is frozen (`_freeze_aim`): nothing corrects the aim, and re-deriving it from GNSS moves
+        the jet by the drift of the GNSS error.
         """
         a = self.agent
         pose = np.append(a.position()[:3], yaw)
@@ -456,11 +467,12 @@ class ExtinguishIndoorFire(AgentTask):
                     first_level = a.water_level
                 pumped = 0.0 if first_level is None or not math.isfinite(a.water_level) \
                     else first_level - a.water_level
-                if cold.update(soak.update(a.fire_detected(), watered, pumped, a.backend.now()), watered):
+                detected = a.fire_detected()
+                if cold.update(soak.update(self._hot(detected, fire_id), watered, pumped, a.backend.now()),
+                               watered):
                     break
-                reads_cold = cold.seen_hot and (soak.soaking or cold.cold_in_row > 0)
-                if reads_cold != frozen:
-                    frozen = reads_cold
+                if detected is not None and cold.seen_hot and frozen == bool(detected):
+                    frozen = not detected                # the detector lost it: nothing corrects the aim
                     self._freeze_aim(frozen)
         finally:
             a.stop_pump()
@@ -471,6 +483,33 @@ class ExtinguishIndoorFire(AgentTask):
         out, why = dry_tank_verdict(cold)
         a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {why}')
         return out, 'extinguished' if out else why
+
+    def _hot(self, detected: Optional[bool], fire_id: int) -> Optional[bool]:
+        """Hot, cold or no evidence (None), for the soak and the cold check: hot while the detector sees the fire
+        (its frame is then locked), else the raw thermal image's contrast of the locked fire to its wall
+        (FireContrast.answer). Why not the detector's "no fire": it drops a fire whose heat fell under its
+        contrast test (30 degC over the frame's median) well before it is out."""
+        c = self.contrast
+        if detected:
+            c.lock_on_latest()
+            c.answer()                                   # the frames so far are the hot fire's
+            return True
+        hot = c.answer()
+        if hot is None and c.locked and not c.fresh():
+            self.agent.backend.logerr_throttle(5.0, f'[{self.name}] fire {fire_id}: no raw thermal frame '
+                                                    f'({RAW_THERMAL_TOPIC}) for {c.now() - c.frame_time:.1f} s: '
+                                                    'not judged cold')
+        elif hot is False and c.last == c.last:
+            self.agent.backend.loginfo_throttle(2.0, f'[{self.name}] fire {fire_id} at its wall\'s level in the '
+                                                     f'raw thermal image: {c.last:.1f} degC over it (locked at '
+                                                     f'{c.locked_contrast:.1f}, cold at <= {c.out_contrast:.1f})')
+        elif hot:
+            self.agent.backend.loginfo_throttle(2.0, f'[{self.name}] fire {fire_id} unseen by the detector, still '
+                                                     f'{c.last:.1f} degC over its wall in the raw thermal image')
+        if c.bad:
+            self.agent.backend.logerr_throttle(5.0, f'[{self.name}] {c.bad} raw thermal frames ignored (not 1024 '
+                                                    'finite deg C)')
+        return hot
 
     def _keep_aim(self, yaw: float) -> float:
         """While pumping: the watering heading, turned onto the hot spot of the latest thermal detection (at
@@ -527,6 +566,7 @@ class ExtinguishIndoorFire(AgentTask):
         while True:
             cold.update(self.agent.fire_detected())
             if cold.seen_hot:
+                self.contrast.lock_on_latest()           # the fire as seen hot, for the raw cold check
                 return True
             if self.agent.backend.now() >= end:
                 return False

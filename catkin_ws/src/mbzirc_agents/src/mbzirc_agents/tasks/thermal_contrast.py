@@ -1,0 +1,173 @@
+"""Whether a watered fire still stands out of its wall, read on the raw thermal image (not the detector's answer).
+
+Why not the fire detector's CheckFire answer: the detector reports a fire only while it stands ~min_contrast
+(30 degC) above the frame's median, a test made to reject sun-heated walls, not to say "out". A fire whose heat
+fades as water arrives falls under it well before it is out (ideal missions: indoor fires judged out at 85 % and
+98.5 % watered, after the detector stopped reporting them).
+
+The measure (FireContrast): when the detector sees the fire, its frame is locked: the fire's core is the pixels
+that rise at least CORE_SHARE of the way from the frame's cool part (its LOW_PERCENTILE) to its hottest pixel,
+its surroundings the pixels that rise less than SURROUND_SHARE of it and lie SURROUND_GAP px or more from any
+warmer one (the wall around the fire). Each later frame's contrast is the mean of the core minus the wall's
+level under it (a plane fitted to the surroundings): the difference removes the camera's offset and the wall's
+own level and slope (a sun-heated wall reads 35-55 degC, warmer on its sunny side), and the means over the core
+and the surroundings average the pixel noise down, so
+that a fire is cold when that contrast falls to the noise level (~out_contrast), not when it falls under a
+detection threshold. The aim is frozen while the detector no longer sees the fire (tasks/indoor.py), so the fire
+stays on the locked pixels.
+"""
+from __future__ import annotations
+
+import math
+import threading
+from typing import Callable, Optional
+
+import numpy as np
+
+FRAME_SIZE = 32            # TeraRanger Evo Thermal 33: 32 x 32 temperatures, row-major
+LOW_PERCENTILE = 10.0      # the frame's cool part: the wall the fire is on (a fire rarely fills 90 % of it)
+CORE_SHARE = 0.5           # core: the pixels at least half way from the wall to the hottest pixel
+SURROUND_SHARE = 0.1       # surroundings: pixels under a tenth of the way ...
+SURROUND_GAP = 2           # ... at least this many pixels from any warmer one (the fire's blurred edge)
+MIN_CORE = 2               # pixels: fewer cannot be told from a glitching pixel
+MIN_SURROUND = 16          # pixels: fewer give no reliable wall level
+LOCK_MIN_RISE = 3.0        # x ~out_contrast the hottest pixel must rise above the wall to lock a frame
+MAX_AGE = 1.5              # s: with no frame this recent the camera says nothing (no evidence)
+
+
+def frame_of(data) -> Optional[np.ndarray]:
+    """The 32 x 32 frame of a raw_temp_array's data (non-finite pixels NaN), None when it has another size or
+    no finite value."""
+    arr = np.asarray(data, dtype=np.float64)
+    if arr.ndim != 1 or arr.size != FRAME_SIZE * FRAME_SIZE:
+        return None
+    arr = np.where(np.isfinite(arr), arr, np.nan)
+    if np.isnan(arr).all():
+        return None
+    return arr.reshape(FRAME_SIZE, FRAME_SIZE)
+
+
+def _dilate(mask: np.ndarray, gap: int) -> np.ndarray:
+    """mask grown by gap pixels (a square neighbourhood)."""
+    h, w = mask.shape
+    padded = np.pad(mask, gap)
+    out = np.zeros_like(mask)
+    for dy in range(2 * gap + 1):
+        for dx in range(2 * gap + 1):
+            out |= padded[dy:dy + h, dx:dx + w]
+    return out
+
+
+def lock_masks(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
+    """(core, surroundings) boolean masks of the fire in frame, None when nothing rises min_rise above the
+    wall or either part is too small to measure."""
+    valid = np.isfinite(frame)
+    low = float(np.nanpercentile(frame, LOW_PERCENTILE))
+    rise = float(np.nanmax(frame)) - low
+    if not rise >= min_rise:
+        return None
+    filled = np.where(valid, frame, -np.inf)
+    core = filled >= low + CORE_SHARE * rise
+    warm = filled >= low + SURROUND_SHARE * rise
+    surround = valid & ~_dilate(warm, SURROUND_GAP)
+    if core.sum() < MIN_CORE or surround.sum() < MIN_SURROUND:
+        return None
+    return core, surround
+
+
+_ROWS, _COLS = np.mgrid[0:FRAME_SIZE, 0:FRAME_SIZE].astype(np.float64)
+_PLANE = np.stack([np.ones(FRAME_SIZE * FRAME_SIZE), _ROWS.ravel(), _COLS.ravel()], axis=1)
+
+
+def contrast(frame: np.ndarray, masks: tuple) -> float:
+    """deg C the locked core reads above its surroundings in frame (NaN when either part has too few valid
+    pixels): the core's mean less the wall's level under it, a plane fitted to the surroundings (a sun-heated
+    wall is warmer on its sunny side, and the surroundings need not lie evenly around the fire); pixels
+    farther than 3 robust deviations from the first fit (a glitching pixel, a warm object) are dropped."""
+    core, surround = masks
+    flat = frame.ravel()
+    hot = flat[core.ravel()]
+    hot = hot[np.isfinite(hot)]
+    idx = np.flatnonzero(surround.ravel() & np.isfinite(flat))
+    if not hot.size or idx.size < MIN_SURROUND:
+        return math.nan
+    for _ in range(2):
+        coef = np.linalg.lstsq(_PLANE[idx], flat[idx], rcond=None)[0]
+        resid = flat[idx] - _PLANE[idx] @ coef
+        spread = 1.4826 * float(np.median(np.abs(resid))) + 1e-6
+        keep = np.abs(resid) <= 3.0 * spread
+        if keep.all() or keep.sum() < MIN_SURROUND:
+            break
+        idx = idx[keep]
+    wall = _PLANE[core.ravel()] @ coef
+    return float(hot.mean() - wall[np.isfinite(flat[core.ravel()])].mean())
+
+
+class FireContrast:
+    """Raw thermal frames in (`on_frame`, at most one every `period` s is processed), the locked fire's
+    contrast out (`answer`): True while it stands more than `out_contrast` above its wall, False at the noise
+    level, None without a lock or a recent frame (no evidence either way)."""
+
+    def __init__(self, now: Callable[[], float], out_contrast: float, period: float) -> None:
+        self.now = now
+        self.out_contrast, self.period = out_contrast, period
+        self.lock = threading.Lock()
+        self.frame: Optional[np.ndarray] = None
+        self.frame_time = -math.inf
+        self.masks: Optional[tuple] = None
+        self.locked_contrast = math.nan          # the contrast of the locked frame (the fire seen hot)
+        self.contrasts: list = []                # of the frames measured since the last answer
+        self.last = math.nan                     # the last answer's contrast (for the log)
+        self.bad = 0                             # malformed frames seen (the task logs them)
+
+    def clear(self) -> None:
+        with self.lock:
+            self.masks, self.contrasts, self.frame = None, [], None
+            self.locked_contrast = self.last = math.nan
+
+    def on_frame(self, data) -> None:
+        """A raw_temp_array's data (1024 deg C); processed when `period` s passed since the last one."""
+        now = self.now()
+        if now - self.frame_time < self.period:
+            return
+        frame = frame_of(data)
+        with self.lock:
+            if frame is None:
+                self.bad += 1
+                return
+            self.frame, self.frame_time = frame, now
+            if self.masks is not None:
+                c = contrast(frame, self.masks)
+                if math.isfinite(c):
+                    self.contrasts.append(c)
+
+    def lock_on_latest(self) -> bool:
+        """Lock the fire on the latest frame (called while the detector sees it); False when that frame has
+        no fire that can be measured (the previous lock stays)."""
+        with self.lock:
+            if self.frame is None or self.now() - self.frame_time > MAX_AGE:
+                return False
+            masks = lock_masks(self.frame, LOCK_MIN_RISE * self.out_contrast)
+            if masks is None:
+                return False
+            self.masks, self.contrasts = masks, []
+            self.locked_contrast = contrast(self.frame, masks)
+            return True
+
+    @property
+    def locked(self) -> bool:
+        return self.masks is not None
+
+    def fresh(self) -> bool:
+        return self.now() - self.frame_time <= MAX_AGE
+
+    def answer(self) -> Optional[bool]:
+        """Hot (True) or cold (False) by the contrast of the latest frame since the last answer (each answer
+        a new frame; the latest, as the fire changes under the water); None without a lock, a recent frame or
+        a frame since."""
+        with self.lock:
+            values, self.contrasts = self.contrasts, []
+            if self.masks is None or not values or self.now() - self.frame_time > MAX_AGE:
+                return None
+            self.last = float(values[-1])
+            return self.last > self.out_contrast

@@ -1,0 +1,88 @@
+"""FireContrast: a locked fire's contrast to its wall on raw thermal frames (tasks/thermal_contrast.py)."""
+import math
+
+import numpy as np
+import pytest
+
+from fake_thermal import fire_frame
+from mbzirc_agents.tasks.thermal_contrast import FireContrast, contrast, frame_of, lock_masks
+
+
+class Clock:
+    def __init__(self):
+        self.t = 0.0
+
+    def __call__(self):
+        return self.t
+
+
+def feed(fc, clock, frame, dt=0.25):
+    clock.t += dt
+    fc.on_frame(np.asarray(frame).ravel())
+
+
+@pytest.mark.parametrize('wall, gradient, offset', [(31.0, 0.0, 0.0), (52.0, 8.0, 2.0), (38.0, -6.0, -2.0)])
+def test_the_contrast_is_the_fires_rise_over_its_wall_whatever_the_walls_level_and_the_cameras_offset(
+        wall, gradient, offset):
+    rng = np.random.default_rng(0)
+    masks = lock_masks(fire_frame(60.0, wall=wall, gradient=gradient, offset=offset, noise=1.0, rng=rng), 6.0)
+    assert masks is not None
+    for heat in (60.0, 20.0, 8.0, 4.0, 0.0):
+        c = [contrast(fire_frame(heat, wall=wall, gradient=gradient, offset=offset, noise=1.0, rng=rng), masks)
+             for _ in range(50)]
+        # the core's mean takes in some of the fire's cooler rim: a fixed share of the heat, never the wall's
+        assert abs(np.mean(c) - heat) < 0.1 * heat + 0.3 and np.std(c) < 0.6, (heat, np.mean(c), np.std(c))
+
+
+def test_noise_on_a_sun_heated_wall_never_reads_a_warm_fire_cold_nor_an_out_fire_warm():
+    """Out_contrast 2 degC; pixel noise 1 degC (the camera's), a wall at 52 degC 8 degC warmer on one side."""
+    rng = np.random.default_rng(1)
+    clock = Clock()
+    for heat, hot in ((4.0, True), (0.0, False)):
+        fc = FireContrast(clock, 2.0, 0.2)
+        feed(fc, clock, fire_frame(60.0, wall=52.0, gradient=8.0, noise=1.0, rng=rng))
+        assert fc.lock_on_latest()
+        answers = []
+        for _ in range(300):
+            feed(fc, clock, fire_frame(heat, wall=52.0, gradient=8.0, noise=1.0, rng=rng))
+            answers.append(fc.answer())
+        assert answers == [hot] * 300
+
+
+def test_no_lock_no_frame_or_a_stale_frame_is_no_evidence():
+    clock = Clock()
+    fc = FireContrast(clock, 2.0, 0.2)
+    feed(fc, clock, fire_frame(0.0))
+    assert not fc.lock_on_latest()                   # nothing stands out: nothing to lock
+    assert fc.answer() is None
+    feed(fc, clock, fire_frame(60.0))
+    assert fc.lock_on_latest()
+    assert fc.answer() is None                       # no frame since the lock
+    feed(fc, clock, fire_frame(0.0))
+    assert fc.answer() is False
+    assert fc.answer() is None                       # each answer needs a new frame
+    clock.t += 5.0
+    fc.contrasts.append(0.0)
+    assert fc.answer() is None                       # the camera went silent
+
+
+def test_frames_come_at_most_every_period_and_bad_ones_are_counted():
+    clock = Clock()
+    fc = FireContrast(clock, 2.0, 0.2)
+    feed(fc, clock, fire_frame(60.0))
+    assert fc.lock_on_latest()
+    for _ in range(10):                              # 14 Hz: about one in three measured
+        feed(fc, clock, fire_frame(0.0), dt=1 / 14)
+    assert 3 <= len(fc.contrasts) <= 4
+    clock.t += 1.0
+    fc.on_frame([1.0] * 10)
+    fc.on_frame([math.nan] * 1024)
+    assert fc.bad == 2                               # a bad frame is no frame: the next one is read at once
+    assert frame_of([math.nan] * 1024) is None and frame_of([30.0] * 1024).shape == (32, 32)
+
+
+def test_a_fire_filling_the_frame_locks_only_with_a_wall_around_it():
+    big = fire_frame(60.0, radius=30.0, noise=0.0)   # the whole frame is fire: no wall to measure against
+    assert lock_masks(big, 6.0) is None
+    core, surround = lock_masks(fire_frame(60.0, radius=14.0, noise=0.0), 6.0)
+    assert core.sum() > 400 and surround.sum() >= 16 and not (core & surround).any()
