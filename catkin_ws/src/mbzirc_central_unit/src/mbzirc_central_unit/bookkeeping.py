@@ -82,6 +82,8 @@ class Bookkeeping:
         if self.failures[key] < self.p.max_failures:
             return False
         self._count_search(cmd)  # a search given up counts as one, so that the mission moves on
+        if cmd.task == C.ENTER_BUILDING:   # so does a room whose window this agent gave up entering
+            self.indoor_searches[cmd.target] += 1
         return True
 
     def take_notes(self) -> list[str]:

@@ -26,6 +26,12 @@ class IndoorPhase(Decider):
         left = [i for i in rooms if searches[(floor, i)] < self.p.facade_searches]
         return sorted(left, key=lambda i: (searches[(floor, i)], i))
 
+    def room_ok(self, a: AgentView, floor: int, idx: int) -> bool:
+        """False once this agent failed to search the room, or to enter it, too often (a window the laser
+        finds too narrow, e.g. an interior wall's end behind it: explored layouts know no interior wall)."""
+        target = (floor, idx)
+        return self.book.ok(a, C.SEARCH_INDOOR, target) and self.book.ok(a, C.ENTER_BUILDING, target)
+
     def uav_floors(self, world: WorldView) -> list[int]:
         """Indoor floors for the UAVs: floors 1-2, and the ground floor too once the UGV is gone or gave up."""
         floors = list(self.p.indoor_floors)
@@ -68,7 +74,7 @@ class IndoorPhase(Decider):
             if idx is None:
                 return None
             return self._to_room(a, floor, idx, rooms[idx], inside, f"to indoor fire {fire.fire_id}")
-        left = [i for i in self.rooms_to_search(floor) if self.book.ok(a, C.SEARCH_INDOOR, (floor, i))]
+        left = [i for i in self.rooms_to_search(floor) if self.room_ok(a, floor, i)]
         if not left:
             return None
         idx = left[0]

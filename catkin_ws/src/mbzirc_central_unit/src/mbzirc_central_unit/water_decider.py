@@ -80,7 +80,7 @@ class WaterDecider(Decider):
         second = [f for f in open_floors if searches[f] >= 1]
         second = [f for f in second if searches[f] < self.p.facade_searches]
         indoor_floors = [f for f in self.indoor.floors_open(world)
-                         if any(self.book.ok(a, C.SEARCH_INDOOR, (f, i)) for i in self.indoor.rooms_to_search(f))]
+                         if any(self.indoor.room_ok(a, f, i) for i in self.indoor.rooms_to_search(f))]
         groups = [first, second, indoor_floors] if self.p.second_search_first else [first, indoor_floors, second]
         for group in groups:
             is_indoor = group is indoor_floors

@@ -91,3 +91,19 @@ def test_an_indoor_fire_anywhere_in_the_tower_is_a_target_without_holders():
     outside = FireView(44, 5.0, 5.0, 6.5, C.KIND_INDOOR)
     assert s.water._plausible(inside) and not s.water._plausible(outside)
     assert s.indoor._viewpoint_of(1, inside) is None            # no holder viewpoint: faced from its side
+
+
+def test_a_window_an_agent_cannot_enter_is_given_up_and_the_next_room_taken():
+    """Facade B's floor-1 window opens onto the end of the default world's interior wall: the laser finds
+    no opening wide enough and enter_building fails. It was sent again and again (ideal seed 3: 7 times,
+    the UAV's whole time); now after ~max_failures the room counts as searched by that agent."""
+    s = explored()
+    room = s.p.layout.rooms[1][0]
+    a = uav(*room.entry[:3])
+    for _ in range(s.p.max_failures):
+        cmd = s.indoor.step(a, 1, None)
+        assert cmd.task == C.ENTER_BUILDING and cmd.target == (1, 0)
+        s.on_sent(cmd); s.on_result(cmd, False, {"message": "window not found ahead by the laser in 20 s"})
+    cmd = s.indoor.step(a, 1, None)
+    assert cmd is None or cmd.target != (1, 0), cmd
+    assert s.book.indoor_searches[(1, 0)] == 1
