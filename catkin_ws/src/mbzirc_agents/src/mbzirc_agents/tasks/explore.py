@@ -35,8 +35,8 @@ from ..leg_guard import LegGuard
 
 def footprint_here(here) -> Optional[tuple]:
     """x_min, y_min, x_max, y_max of the (public) footprint of the building the robot stands in."""
-    b = standing_at(here, C.BUILDINGS)
-    return tuple(b[:4]) if b is not None else None
+    inside = [b for b in standing_at(here, C.BUILDINGS) if b[0] <= here[0] <= b[2] and b[1] <= here[1] <= b[3]]
+    return tuple(inside[0][:4]) if inside else None
 
 
 class Exploration:
@@ -104,10 +104,11 @@ class Exploration:
                 self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
             except TaskError:
                 self.skip.append(legs[-1])
+                self.visited.append(tuple(self.agent.position()[:3]))    # where the guard held it
                 self.add_scan()
                 return False
-            self.visited.append((x, y, z))
-        return True
+            self.visited.append(tuple(self.agent.position()[:3]))        # where it is (a doorway's passage
+        return True                                                        # may end deeper than the leg)
 
     def go_back(self) -> None:
         """Back along the visited points (legs it travelled) to where the exploration started."""
@@ -115,6 +116,10 @@ class Exploration:
         back = list(reversed(self.visited))
         while back and math.dist(back[0][:2], here[:2]) <= self.agent.p.position_tolerance:
             back.pop(0)
-        for q in back:
-            self.task.feedback('EXPLORING', f'floor {self.floor}: back to where the search started')
-            self.task.call_task_or_raise('move', {'waypoint': (tuple(q), None)})
+        try:
+            for q in back:
+                self.task.feedback('EXPLORING', f'floor {self.floor}: back to where the search started')
+                on_to = self.task.passage.doorway(q)
+                self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
+        except TaskError as e:    # the search's result stands; the caller's way out starts from here
+            self.agent.backend.logwarn(f'[{self.task.name}] floor {self.floor}: back from exploring: {e}')

@@ -20,6 +20,7 @@ from ..leg_guard import LegGuard
 from ..wall_clearance import back_off, stop_short
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
+from .explore import Exploration, footprint_here
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
 from .thermal_contrast import FireContrast
@@ -116,12 +117,15 @@ class SearchIndoor(AgentTask):
                     on_to = self.passage.doorway(wp)     # through a doorway on the way, if there is one
                     self.call_task_or_raise('move', {'waypoint': (on_to, yaw)})
             except TaskError as e:
+                if a.p.indoor_search == 'explore' and footprint_here(a.position()) is not None:
+                    # a leg of the path stopped inside (an interior wall no one was told of): explore from here
+                    a.backend.logwarn(f'[{self.name}] waypoint {i + 1}: {e}: exploring from here')
+                    break
                 raise TaskError(f'waypoint {i + 1}: {e}')
             found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p.stop_at_first_fire:
                 break
         if not found and a.p.indoor_search == 'explore':
-            from .explore import Exploration       # from the path's last waypoint on, on sensed free space
             found = Exploration(self, ud.floor).run()
         self.result['fire_ids'] = found
         self.result['message'] = (f'active indoor fires on floor {ud.floor}: {found}' if found
