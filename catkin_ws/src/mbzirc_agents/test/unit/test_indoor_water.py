@@ -545,3 +545,25 @@ def test_a_fire_still_warm_on_a_noisy_sun_heated_wall_is_never_judged_out(scenes
     assert s.status == 'succeeded' and not s.result.extinguished, s.result.message
     assert 'left for a top-up' in s.result.message
     assert sc.statuses == []
+
+
+def test_a_nearly_full_fire_the_detector_does_not_report_is_topped_up_until_it_reads_at_its_walls_level(scenes):
+    """Realistic benchmark on ed77bf3 (seeds 101, 102, 108): fires left at 95-97 % by a tank that ran dry were
+    never finished, every top-up aborting as "not seen hot" (under the detector's contrast test). The raw image
+    sees it 10 degC over its wall: it is locked, watered until it reads at the wall's level, and judged out
+    only once it had its water."""
+    sc = scenes(hot_until=0.0)
+    fire = FadingFire(sc, need=1.0, start_water=4.0, heat=10.0, seen_share=2.0)
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
+
+
+def test_a_sun_heated_walls_slope_is_not_a_fire_for_a_top_up(scenes):
+    """No fire, a wall 12 degC warmer on one side of the frame, noise 1 degC: nothing is locked, the top-up
+    aborts as "not seen hot" and nothing is judged out."""
+    sc = scenes(hot_until=0.0)
+    FadingFire(sc, need=1.0, start_water=2.0, heat=0.0, seen_share=2.0, wall=50.0, gradient=12.0, noise=1.0)
+    s = sc.extinguish()
+    assert s.status == 'aborted' and 'not seen hot from the watering pose' in s.result.message, s.result.message
+    assert sc.statuses == []

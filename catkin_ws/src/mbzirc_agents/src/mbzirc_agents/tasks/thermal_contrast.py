@@ -60,7 +60,8 @@ def _dilate(mask: np.ndarray, gap: int) -> np.ndarray:
 
 def lock_masks(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
     """(core, surroundings) boolean masks of the fire in frame, None when nothing rises min_rise above the
-    wall or either part is too small to measure."""
+    wall (its hottest pixel, and the core's contrast: a sun-heated wall's slope is no fire) or either part is
+    too small to measure."""
     valid = np.isfinite(frame)
     low = float(np.nanpercentile(frame, LOW_PERCENTILE))
     rise = float(np.nanmax(frame)) - low
@@ -71,6 +72,8 @@ def lock_masks(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
     warm = filled >= low + SURROUND_SHARE * rise
     surround = valid & ~_dilate(warm, SURROUND_GAP)
     if core.sum() < MIN_CORE or surround.sum() < MIN_SURROUND:
+        return None
+    if not contrast(frame, (core, surround)) >= min_rise:
         return None
     return core, surround
 
