@@ -1,10 +1,9 @@
 """search_indoor with ~indoor_search explore, against a fake UAL, a ray-cast laser and a thermal camera that
 sees a fire in straight sight ahead: the UGV, given only its door, finds a fire two doorways away in a floor
-plan it was not told of, without driving near a wall; in plan mode the same search does not find it."""
+plan it was not told of, without driving near a wall; in plan mode the same search does not find it. The
+UGV starts just inside its door (a search given again): the door's passage is test_passage's."""
 import math
-import threading
 
-import numpy as np
 import pytest
 from mbzirc_comm_objs.msg import Object, ObjectList, SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
@@ -34,8 +33,7 @@ def blocked(p, q, boxes, half=0.0, n=80):
 def scene(request):
     mode = request.param
     be = FakeBackend()
-    inside = C.UGV_DOOR_INSIDE
-    agent, ual = start_ugv(be, (C.UGV_DOOR_OUTSIDE[0], C.UGV_DOOR_OUTSIDE[1], 0.0), {'check_fire_time': 1.0, 'indoor_search': mode,
+    agent, ual = start_ugv(be, (14.25, 8.0, 0.0), {'check_fire_time': 1.0, 'indoor_search': mode,
                                                    'explore_budget': 400.0})
     ual.yaw = math.pi / 2
     ual.follow_velocity = True
