@@ -550,10 +550,10 @@ def test_a_fire_still_warm_on_a_noisy_sun_heated_wall_is_never_judged_out(scenes
 def test_a_nearly_full_fire_the_detector_does_not_report_is_topped_up_until_it_reads_at_its_walls_level(scenes):
     """Realistic benchmark on ed77bf3 (seeds 101, 102, 108): fires left at 95-97 % by a tank that ran dry were
     never finished, every top-up aborting as "not seen hot" (under the detector's contrast test). The raw image
-    sees it 10 degC over its wall: it is locked, watered until it reads at the wall's level, and judged out
+    sees it 16 degC over its wall: it is locked, watered until it reads at the wall's level, and judged out
     only once it had its water."""
     sc = scenes(hot_until=0.0)
-    fire = FadingFire(sc, need=1.0, start_water=4.0, heat=10.0, seen_share=2.0)
+    fire = FadingFire(sc, need=2.0, start_water=4.0, heat=16.0, seen_share=2.0)
     s = sc.extinguish()
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
