@@ -7,14 +7,14 @@ fades as water arrives falls under it well before it is out (ideal missions: ind
 
 The measure (FireContrast): when the detector sees the fire, its frame is locked: the fire's core is the pixels
 that rise at least CORE_SHARE of the way from the frame's cool part (its LOW_PERCENTILE) to its hottest pixel,
-its surroundings the pixels that rise less than SURROUND_SHARE of it and lie SURROUND_GAP px or more from any
-warmer one (the wall around the fire). Each later frame's contrast is the mean of the core minus the wall's
-level under it (a plane fitted to the surroundings): the difference removes the camera's offset and the wall's
-own level and slope (a sun-heated wall reads 35-55 degC, warmer on its sunny side), and the means over the core
-and the surroundings average the pixel noise down, so
-that a fire is cold when that contrast falls to the noise level (~out_contrast), not when it falls under a
-detection threshold. The aim is frozen while the detector no longer sees the fire (tasks/indoor.py), so the fire
-stays on the locked pixels.
+its surroundings every pixel SURROUND_GAP px or more from the core. Each later frame's contrast is the mean of
+the core minus the wall's level under it: a plane fitted to the surroundings, pixels off it by more than 3
+robust deviations dropped (the fire's cooler parts: a heater in a hole, a flame's rim). The difference removes
+the camera's offset and the wall's own level and slope (a sun-heated wall reads 35-55 degC, warmer on its
+sunny side), and the means over the core and the surroundings average the pixel noise down, so that a fire is
+cold when that contrast falls to the noise level (~out_contrast), not when it falls under a detection
+threshold. The aim is frozen while the detector no longer sees the fire (tasks/indoor.py), so the fire stays
+on the locked pixels.
 """
 from __future__ import annotations
 
@@ -27,11 +27,11 @@ import numpy as np
 FRAME_SIZE = 32            # TeraRanger Evo Thermal 33: 32 x 32 temperatures, row-major
 LOW_PERCENTILE = 10.0      # the frame's cool part: the wall the fire is on (a fire rarely fills 90 % of it)
 CORE_SHARE = 0.5           # core: the pixels at least half way from the wall to the hottest pixel
-SURROUND_SHARE = 0.1       # surroundings: pixels under a tenth of the way ...
-SURROUND_GAP = 2           # ... at least this many pixels from any warmer one (the fire's blurred edge)
+SURROUND_GAP = 2           # surroundings: the pixels at least this far from the core (its blurred edge)
 MIN_CORE = 2               # pixels: fewer cannot be told from a glitching pixel
 MIN_SURROUND = 16          # pixels: fewer give no reliable wall level
-LOCK_MIN_RISE = 3.0        # x ~out_contrast the hottest pixel must rise above the wall to lock a frame
+LOCK_MIN_RISE = 2.0        # x ~out_contrast a frame's fire must stand over its wall to be locked: clearly warmer
+                           # than the cold verdict's level (a top-up's fire at 95 % reads 5-10 degC at 1.5 m)
 MAX_AGE = 1.5              # s: with no frame this recent the camera says nothing (no evidence)
 
 
@@ -67,10 +67,8 @@ def lock_masks(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
     rise = float(np.nanmax(frame)) - low
     if not rise >= min_rise:
         return None
-    filled = np.where(valid, frame, -np.inf)
-    core = filled >= low + CORE_SHARE * rise
-    warm = filled >= low + SURROUND_SHARE * rise
-    surround = valid & ~_dilate(warm, SURROUND_GAP)
+    core = np.where(valid, frame, -np.inf) >= low + CORE_SHARE * rise
+    surround = valid & ~_dilate(core, SURROUND_GAP)
     if core.sum() < MIN_CORE or surround.sum() < MIN_SURROUND:
         return None
     if not contrast(frame, (core, surround)) >= min_rise:
