@@ -604,14 +604,14 @@ class RobotAgent(Agent):
             setattr(req, name, point)
         return req
 
-    def pose_error_pad(self, label: str) -> np.ndarray:
+    def pose_error_pad(self, label: str, over_pad: bool = False) -> np.ndarray:
         """m (x, y, z) our box `label` is grown by on each side for the error of our reported pose."""
-        return pose_error_pad(label, self.p.pose_error_margin, self.p.pose_error_margin_z)
+        return pose_error_pad(label, self.p.pose_error_margin, self.p.pose_error_margin_z, over_pad)
 
-    def _ask(self, label: str, box: Box) -> tuple:
-        """One ask_for_region of box grown by our pose error (pose_error_boxes.py): (granted, why not); a
-        granted box is remembered in `held` as the manager holds it."""
-        box = grown(box, self.pose_error_pad(label))
+    def _ask(self, label: str, box: Box, over_pad: bool = False) -> tuple:
+        """One ask_for_region of box grown by our pose error (pose_error_boxes.py; over_pad: x, y are a
+        pad's): (granted, why not); a granted box is remembered in `held` as the manager holds it."""
+        box = grown(box, self.pose_error_pad(label, over_pad))
         try:
             if not self.ask_srv(self._region_request(label, box)).success:
                 return False, 'occupied by another agent'
@@ -621,7 +621,8 @@ class RobotAgent(Agent):
             self.held[label] = (np.asarray(box[0], float), np.asarray(box[1], float))
         return True, ''
 
-    def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None) -> None:
+    def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None,
+                over_pad: bool = False) -> None:
         """Ask for box under label until granted (2 Hz); TaskError after timeout s.
 
         While it waits, the region manager may ask this robot to step aside out of another robot's
@@ -635,7 +636,7 @@ class RobotAgent(Agent):
         try:
             while True:
                 task.check_preempt()
-                ok, why = self._ask(label, box)
+                ok, why = self._ask(label, box, over_pad)
                 if ok:
                     return
                 with self._regions_lock:

@@ -52,6 +52,9 @@ def lowest_granted_z(rm, agent_id, x, y, z0):
 def test_hover_box_grows_by_the_pose_error_margins(uav):
     agent, ual, be = uav
     assert take_off(be, 6.0) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=pose(3.0, 0.0, 6.0)))
+    assert s.wait(20) == 'succeeded'
     lo, hi = ual.regions.regions()[('2', 'hold')]
     p = agent.position()[:3]
     reach_lo, reach_hi = p - np.asarray(lo), np.asarray(hi) - p
@@ -100,6 +103,18 @@ def test_pad_boxes_do_not_grow_sideways_so_a_uav_takes_off_between_parked_neighb
     assert take_off(be, 7.0) == 'succeeded'
     for label in GROUND_ANCHORED:
         assert pose_error_pad(label, 0.75, 0.5)[:2] == pytest.approx([0.0, 0.0])
+
+
+def test_two_uavs_taking_off_from_neighbouring_pads_both_get_their_hold(uav):
+    """Seed 107 with hold boxes grown sideways around the reported pose: UAV 1 (pad (-2, 1.65), to 4 m) and
+    UAV 2 (pad (0, 0), to 7 m, stopped 0.3 m short) each waited for ever for a hold box overlapping the
+    other's take-off column. The take-off's hold is over the pad, as the column: granted."""
+    agent, ual, be = uav
+    h, mz = C.HOLD_HALF_SIZE, C.POSE_ERROR_MARGIN_Z
+    assert ual.regions.ask('1', 'take_off', (-2.0 - h, 1.65 - h, -mz), (-2.0 + h, 1.65 + h, 4.0 + h + mz))[0]
+    assert take_off(be, 6.7) == 'succeeded'
+    lo, hi = ual.regions.regions()[('2', 'hold')]
+    assert lo[:2] == pytest.approx([-h, -h]) and hi[:2] == pytest.approx([h, h])
 
 
 def test_negative_margins_never_shrink_a_box():

@@ -71,9 +71,10 @@ LEG_BLOCKED_BACKOFF_MAX = 60.0
 MAX_BLOCKED_LEGS = 3
 # 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is probably out
 NOT_SEEN_HOT_LIMIT = 2
-# Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 3 m apart: the agents'
+# Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 3.5 m apart: the agents'
 # boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of the reported height,
-# mbzirc_agents pose_error_boxes.py), so that UAVs crossing at their own altitudes need not wait for each other
-DEFAULT_ALTITUDES = {"1": 4.0, "2": 7.0, "3": 10.0}
+# mbzirc_agents pose_error_boxes.py), and 0.5 m more for the heights the UAVs hold (a take-off ends within
+# 0.3 m): UAVs crossing at their own altitudes, or hovering over neighbouring pads, need not wait for each other
+DEFAULT_ALTITUDES = {"1": 4.0, "2": 7.5, "3": 11.0}
 ALTITUDE_BASE = 4.0
-ALTITUDE_STEP = 3.0
+ALTITUDE_STEP = 3.5

@@ -89,7 +89,8 @@ class TakeOff(AgentTask):
             raise TaskError(f'ual/take_off failed: {e}')
         self.wait_for(lambda: a.ual_state == C.UAL_FLYING_AUTO and abs(a.position()[2] - target_z) < 0.3,
                       ud.height / 0.5 + 20.0, 'the take-off to finish')
-        a.reserve(self, 'hold', hold_box(a, a.position()))
+        # over the pad, at the target height, as the column (pose_error_boxes.py: the take-off's hold)
+        a.reserve(self, 'hold', hold_box(a, (x, y, target_z)), over_pad=True)
         a.free('take_off')
         a.free('parked')
         a.parked = False
