@@ -553,8 +553,8 @@ class ExtinguishIndoorFire(AgentTask):
         e = a.clearance.vertical_error()
         if e is not None:
             self.frozen_true_z = self.aim_z - e
-        a.backend.loginfo(f'[{self.name}] the fire reads cold: aim frozen at {self.aim_z:.2f} m (GNSS), '
-                          + ('held by the altimeter' if e is not None else 'no altimeter estimate: set-point held'))
+        a.backend.loginfo(f'[{self.name}] the detector no longer sees the fire: aim frozen at {self.aim_z:.2f} m '
+                          '(GNSS), ' + ('held by the altimeter' if e is not None else 'no altimeter estimate: set-point held'))
 
     def _hold_frozen_height(self, yaw: float) -> None:
         """The frozen aim's height set-point follows the altimeter's estimate of the vertical GNSS error, so
