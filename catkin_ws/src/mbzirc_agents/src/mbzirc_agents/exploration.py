@@ -19,7 +19,9 @@ Rules:
 - the next viewpoint is the standable cell of a frontier nearest to the robot along standable cells
   (breadth-first over 8-neighbours); its path is cut into straight legs, each a line of standable cells
   (`straight_legs`), so that every leg is one the leg guard checks;
-- `line_of_sight` limits a search to what is in straight sight of its start when a caller asks for it (a
+- with a view range, standable cells farther than it from every point the robot looked from count as
+  frontiers too: the laser sees a whole room from its door, the thermal camera a fire only nearer;
+- `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
   UAV in a window's room, which must come back out the same way).
 Pure geometry here (no ROS); the task using it is tasks/explore.py.
 """
@@ -175,27 +177,34 @@ def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list) -> list:
 
 
 def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min_frontier: int = 3,
-                   skip: Iterable = (), sight_of: Optional[Sequence[float]] = None) -> Optional[list]:
+                   skip: Iterable = (), sight_of: Optional[Sequence[float]] = None,
+                   viewed: Sequence = (), view_range: float = 0.0) -> Optional[list]:
     """The legs [(x, y), ...] to the nearest frontier's nearest standable cell (along the free space), or
-    None when no frontier is reachable. skip: (x, y) viewpoints not to choose again (a blocked leg's end);
-    sight_of: only cells in a straight standable line of this point count."""
+    None when no frontier is reachable. skip: (x, y) points neither to choose nor to pass (a blocked leg's end);
+    sight_of: only cells in a straight standable line of this point count; viewed, view_range > 0: a
+    standable cell farther than view_range from every viewed point (x, y) counts as a frontier too (seen
+    by the laser, not yet near enough for the thermal camera)."""
     start = grid.cell(here[0], here[1])
     if start is None:
         return None
     ok = grid.standable(clearance, here=start)
     origin = grid.cell(sight_of[0], sight_of[1]) if sight_of is not None else None
-    banned = {grid.cell(p[0], p[1]) for p in skip}
+    banned = {grid.cell(p[0], p[1]) for p in skip} - {None, start}
+    for c in banned:             # neither a target nor a cell to pass: a leg to it was found blocked
+        ok[c] = False
     parent = paths_from(ok, start)
     best = None
-    for group in frontiers(grid, ok, min_frontier):
-        for c in group:
-            if c not in parent or c in banned or c == start:
-                continue
-            if origin is not None and not (ok[origin] and grid.line_free(ok, origin, c)):
-                continue
-            d = _path_length(parent, c)
-            if best is None or d < best[0]:
-                best = (d, c)
+    targets = [c for group in frontiers(grid, ok, min_frontier) for c in group]
+    if view_range > 0:
+        targets += unviewed(grid, ok, viewed, view_range)
+    for c in set(targets):
+        if c not in parent or c in banned or c == start:
+            continue
+        if origin is not None and not (ok[origin] and grid.line_free(ok, origin, c)):
+            continue
+        d = _path_length(parent, c)
+        if best is None or d < best[0]:
+            best = (d, c)
     if best is None:
         return None
     cells, c = [], best[1]
@@ -204,6 +213,16 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
         c = parent[c]
     cells.reverse()
     return [grid.centre(c) for c in straight_legs(grid, ok, cells)]
+
+
+def unviewed(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: float) -> list:
+    """Standable cells farther than view_range from every viewed point (x, y)."""
+    far = ok.copy()
+    ii, jj = np.meshgrid(np.arange(grid.nx), np.arange(grid.ny), indexing='ij')
+    xs, ys = grid.x0 + (ii + 0.5) * grid.res, grid.y0 + (jj + 0.5) * grid.res
+    for v in viewed:
+        far &= (xs - v[0]) ** 2 + (ys - v[1]) ** 2 > view_range ** 2
+    return [(int(i), int(j)) for i, j in np.argwhere(far)]
 
 
 def _path_length(parent: dict, c: Cell) -> float:

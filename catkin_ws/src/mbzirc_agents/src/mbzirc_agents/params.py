@@ -190,6 +190,8 @@ class AgentParams:
     explore_look_time: float = _param(1.5, 's of thermal look at each heading (the frame filter needs > 1 s)')
     explore_clearance: float = _param(0.8, 'm from every laser return and the outline a viewpoint and its legs '
                                       'keep')
+    explore_view_range: float = _param(3.5, 'm: free space farther than this from every look-around is a viewpoint '
+                                       'to go to (the thermal camera sees fires nearer than the laser sees walls)')
     explore_resolution: float = _param(0.25, 'm, cell side of the exploration grid')
     explore_min_frontier: int = _param(3, 'cells of a frontier at least (fewer: a missed beam, not unseen space)')
     explore_in_sight: bool = _param(True, 'exploration viewpoints only in straight sight of the first one (a '

@@ -32,13 +32,14 @@ def scan_points(here, walls):
     return np.stack([here[0] + r[ok] * np.cos(a[ok]), here[1] + r[ok] * np.sin(a[ok])], axis=1)
 
 
-def explore(walls, start, steps=40, clearance=0.8, sight=False):
+def explore(walls, start, steps=40, clearance=0.8, sight=False, view_range=0.0):
     """Teleporting robot: look, go to the next viewpoint (checking no leg crosses a wall), repeat."""
     grid = FloorGrid(OUTLINE, 0.25)
-    here, visited = tuple(start), [tuple(start)]
+    here, visited, looked = tuple(start), [tuple(start)], []
     for _ in range(steps):
         grid.add_scan(here, scan_points(here, walls))
-        legs = next_viewpoint(grid, here, clearance, 3, (), start if sight else None)
+        looked.append(here)
+        legs = next_viewpoint(grid, here, clearance, 3, (), start if sight else None, looked, view_range)
         if legs is None:
             break
         for leg in legs:
@@ -105,3 +106,17 @@ def test_nothing_left_to_explore_is_none_and_bad_bounds_are_refused():
     with pytest.raises(ValueError):
         FloorGrid((1.0, 1.0, 0.0, 2.0))
     assert next_viewpoint(grid, (0.0, 0.0), 0.8) is None               # outside the footprint
+
+
+def test_a_room_seen_whole_from_its_window_is_still_visited_near_enough_for_the_thermal_camera():
+    """From facade C's window the laser sees the whole south-west room: no frontier, so no viewpoint but
+    the first, 5 m from the fire place on the interior wall (the detector's hot frames need < 5 m). With
+    a view range every free cell of the room comes within it of a look-around."""
+    walls = outer_walls() + PLAN_A
+    start, fire = (13.1, 12.5), (17.5, 8.5)
+    _, frontier_only = explore(walls, start, sight=True)
+    assert min(math.dist(v, fire) for v in frontier_only) > 3.5
+    _, visited = explore(walls, start, sight=True, view_range=3.5)
+    assert min(math.dist(v, fire) for v in visited) <= 3.5
+    for v in visited:                               # (through a doorway in straight sight, it may leave the room)
+        assert not crosses(start, v, walls, half=0.0), v

@@ -17,7 +17,7 @@ from mbzirc_agents import constants as C
 # x = 18.0..18.2 north of it (doorway y 16-18); the fire on the east face of the latter
 INNER = [(11.6, 11.0, 13.0, 11.2), (15.0, 11.0, 24.0, 11.2), (18.0, 11.2, 18.2, 16.0), (18.0, 18.0, 18.2, 19.3)]
 FIRE = (18.25, 13.0, 1.5)
-SEE = 8.0                      # m the fake camera sees a fire at
+SEE = 5.0                      # m the fake camera sees a fire at (the detector's hot-frame laser gate)
 HALF_FOV = math.radians(30)
 
 
@@ -34,7 +34,7 @@ def scene(request):
     mode = request.param
     be = FakeBackend()
     agent, ual = start_ugv(be, (14.25, 8.0, 0.0), {'check_fire_time': 1.0, 'indoor_search': mode,
-                                                   'explore_budget': 400.0})
+                                                   'explore_budget': 600.0})
     ual.yaw = math.pi / 2
     ual.follow_velocity = True
     boxes = wall_boxes(0.9) + INNER

@@ -46,11 +46,14 @@ def _finite(*vals: float) -> bool:
 
 
 def pose_msg(p: tuple, stamp: rospy.Time) -> PoseStamped:
-    """(x, y, z, yaw) -> PoseStamped in the arena frame."""
+    """(x, y, z, yaw) -> PoseStamped in the arena frame; yaw None: the all-zero quaternion (no heading: the
+    agents look around there, and with ~indoor_search explore explore the floor from there)."""
     m = PoseStamped()
     m.header.frame_id = FRAME
     m.header.stamp = stamp
     m.pose.position.x, m.pose.position.y, m.pose.position.z = float(p[0]), float(p[1]), float(p[2])
+    if len(p) > 3 and p[3] is None:
+        return m
     yaw = float(p[3]) if len(p) > 3 else 0.0
     m.pose.orientation.z, m.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
     return m

@@ -143,8 +143,9 @@ def build_rooms(plan: IndoorPlan) -> dict[int, list[Room]]:
 def window_plan(windows: list[tuple[float, ...]]) -> IndoorPlan:
     """The indoor plan of `~indoor_search explore`: what a team knows (the windows), nothing private.
 
-    One room per window: entered from its entry pose, searched from its inner point facing in (the agents
-    then explore the floor on their laser, mbzirc_agents tasks/explore.py). Without interior walls every
+    One room per window: entered from its entry pose, searched from its inner point with no heading (the
+    agents look around there and explore the floor on their laser, mbzirc_agents tasks/explore.py; a
+    waypoint with a heading, as on the way out, is only gone to). Without interior walls every
     straight line indoors counts as clear (the agents' leg guard checks each against the laser), and a
     fire belongs to the room whose inner point is nearest."""
     rooms: dict[int, list[Room]] = {}
@@ -152,7 +153,7 @@ def window_plan(windows: list[tuple[float, ...]]) -> IndoorPlan:
         yaw = facing(nx, ny)
         inner = (wx - WINDOW_DEPTH * nx, wy - WINDOW_DEPTH * ny, wz)
         entry = (wx + WINDOW_STANDOFF * nx, wy + WINDOW_STANDOFF * ny, wz, yaw)
-        rooms.setdefault(floor_of(wz), []).append(Room(floor_of(wz), entry, inner, [(*inner, yaw)]))
+        rooms.setdefault(floor_of(wz), []).append(Room(floor_of(wz), entry, inner, [(*inner, None)]))
     return IndoorPlan(windows=windows, inner_walls=[], indoor_holders=[], rooms=rooms, explored=True)
 
 

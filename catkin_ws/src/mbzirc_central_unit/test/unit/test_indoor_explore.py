@@ -52,9 +52,14 @@ def test_a_room_is_entered_through_its_window_then_searched_from_just_inside_fac
     s.on_sent(cmd); s.on_result(cmd, True)
     a.x, a.y, a.z = room.inner
     cmd = s.indoor.step(a, 1, None)
-    assert cmd.task == C.SEARCH_INDOOR and cmd.goal["path"] == [room.path[0]]
-    inward = (math.cos(room.path[0][3]), math.sin(room.path[0][3]))
-    assert inward[0] * (room.inner[0] - room.entry[0]) + inward[1] * (room.inner[1] - room.entry[1]) > 0
+    assert cmd.task == C.SEARCH_INDOOR and cmd.goal["path"] == [(*room.inner, None)]
+    # no heading: the all-zero quaternion, by which the agents explore from there (a way out has one)
+    import rospy
+    from mbzirc_central_unit.central_unit import pose_msg
+    q = pose_msg(cmd.goal["path"][0], rospy.Time(0)).pose.orientation
+    assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 0.0)
+    out = s.router.exit_path(a)
+    assert out and out[0][3] is not None
 
 
 def test_a_found_fire_is_reached_through_the_window_of_the_room_that_found_it_and_left_the_same_way():

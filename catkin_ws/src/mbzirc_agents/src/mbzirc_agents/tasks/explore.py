@@ -8,13 +8,18 @@ fire detector and put on /estimated_objects by the estimator, as on any search).
 the next viewpoint are exploration.py's; this is the task's use of them.
 
 Rules:
+- the search explores after a path whose last waypoint has no heading (a room's search, not a way out), or
+  from where the leg guard stopped a leg of the path inside a building;
+- the next viewpoint is a frontier of the laser's free space, or free space farther than
+  ~explore_view_range from everywhere the robot looked around from (the thermal camera sees less far);
 - at every viewpoint (the search path's last waypoint first) the robot turns on the spot through
   ~explore_headings headings, looking with the thermal camera at each (`SearchIndoor._hot`) and adding the
   laser scans of the look to the floor's grid;
 - the legs to the next viewpoint are straight lines of the grid's free cells, each the sub-task `move`
   (UAV: indoor go_to, UGV: straight drive), both with the leg guard (leg_guard.py), a doorway across one
   passed guided by the laser (passage.LaserPassage.doorway) as on a planned search path: a leg the laser finds blocked holds the robot, and that viewpoint is not chosen
-  again (the grid has the return that blocked it from the next look on);
+  again nor passed (the grid has the return that blocked it from the next look on); after MAX_BLOCKED_LEGS
+  blocked legs the exploration ends;
 - ~explore_in_sight (UAVs: they leave through the window they came in by a straight leg) keeps the
   viewpoints in straight sight of the first one;
 - the exploration ends after ~explore_budget s; without a fire the robot goes back along its viewpoints to
@@ -31,6 +36,9 @@ from .. import constants as C
 from ..agent_task import TaskError
 from ..exploration import FloorGrid, next_viewpoint
 from ..leg_guard import LegGuard
+
+
+MAX_BLOCKED_LEGS = 6     # legs found blocked before the exploration ends (the laser sees what the grid does not)
 
 
 def footprint_here(here) -> Optional[tuple]:
@@ -53,6 +61,7 @@ class Exploration:
         self.start = tuple(here[:3])
         self.visited: list = [self.start]
         self.skip: list = []
+        self.looked: list = []       # where it looked around from
 
     def run(self) -> list:
         """Fire ids found on the floor (empty: none within the budget)."""
@@ -61,10 +70,10 @@ class Exploration:
         sight = self.start if p.explore_in_sight else None
         while True:
             found = self.look_around()
-            if found or a.backend.now() >= end:
+            if found or a.backend.now() >= end or len(self.skip) > 2 * MAX_BLOCKED_LEGS:
                 break
             legs = next_viewpoint(self.grid, a.position(), p.explore_clearance, p.explore_min_frontier,
-                                  self.skip, sight)
+                                  self.skip, sight, self.looked, p.explore_view_range)
             if legs is None:
                 a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore')
                 break
@@ -78,6 +87,7 @@ class Exploration:
         """Turn through the headings on the spot; thermal look and laser scan at each. Fire ids found."""
         a, n = self.agent, max(1, int(self.agent.p.explore_headings))
         here = a.position()
+        self.looked.append(tuple(here[:2]))
         for k in range(n):
             yaw = here[3] + 2 * math.pi * k / n
             self.task.feedback('EXPLORING', f'floor {self.floor}: looking {k + 1}/{n}')
@@ -103,7 +113,7 @@ class Exploration:
                 on_to = self.task.passage.doorway((x, y, z))     # through a doorway across it, guided
                 self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
             except TaskError:
-                self.skip.append(legs[-1])
+                self.skip += [(x, y), legs[-1]]
                 self.visited.append(tuple(self.agent.position()[:3]))    # where the guard held it
                 self.add_scan()
                 return False

@@ -108,6 +108,7 @@ class SearchIndoor(AgentTask):
         a = self.agent
         path = list(ud.path) or self.default_path()
         found: list = []
+        explore_here = False
         for i, (wp, yaw) in enumerate(path):
             self.feedback('MOVING', f'waypoint {i + 1}/{len(path)}')
             try:
@@ -120,13 +121,14 @@ class SearchIndoor(AgentTask):
                 if a.p.indoor_search == 'explore' and footprint_here(a.position()) is not None:
                     # a leg of the path stopped inside (an interior wall no one was told of): explore from here
                     a.backend.logwarn(f'[{self.name}] waypoint {i + 1}: {e}: exploring from here')
+                    explore_here = True
                     break
                 raise TaskError(f'waypoint {i + 1}: {e}')
             found = self._look(ud.floor, i, len(path), yaw)
             if found and a.p.stop_at_first_fire:
                 break
-        if not found and a.p.indoor_search == 'explore':
-            found = Exploration(self, ud.floor).run()
+        if not found and a.p.indoor_search == 'explore' and (explore_here or path[-1][1] is None):
+            found = Exploration(self, ud.floor).run()   # a last waypoint without heading: explore from it
         self.result['fire_ids'] = found
         self.result['message'] = (f'active indoor fires on floor {ud.floor}: {found}' if found
                                   else f'no indoor fire found on floor {ud.floor}')

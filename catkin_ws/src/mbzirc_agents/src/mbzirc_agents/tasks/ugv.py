@@ -78,9 +78,10 @@ class UgvSearchIndoor(SearchIndoor):
         out, ins = p.door_outside, p.door_inside
         into = math.atan2(ins[1] - out[1], ins[0] - out[0])
         z = self.agent.position()[2]
+        if p.indoor_search == 'explore':       # exploring from just inside the door (tasks/explore.py)
+            return [((out[0], out[1], z), into), ((ins[0], ins[1], z), None)]
         pts = [((out[0], out[1], z), into), ((ins[0], ins[1], z), into)]
-        if p.indoor_search != 'explore':       # exploring: from just inside the door on (tasks/explore.py)
-            pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p.indoor_search_path]
+        pts += [((q[0], q[1], z), q[2] if len(q) > 2 else None) for q in p.indoor_search_path]
         return pts
 
 
