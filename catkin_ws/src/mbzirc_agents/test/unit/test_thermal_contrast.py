@@ -86,3 +86,27 @@ def test_a_fire_filling_the_frame_locks_only_with_a_wall_around_it():
     assert lock_masks(big, 6.0) is None
     core, surround = lock_masks(fire_frame(60.0, radius=14.0, noise=0.0), 6.0)
     assert core.sum() > 400 and surround.sum() >= 16 and not (core & surround).any()
+
+
+def test_a_core_far_under_its_wall_is_no_evidence_not_cold():
+    """The camera no longer looks at the locked area (a robot backing off a wall: -21 degC seen in a mission)."""
+    clock = Clock()
+    fc = FireContrast(clock, 2.0, 0.2)
+    feed(fc, clock, fire_frame(60.0))
+    assert fc.lock_on_latest()
+    feed(fc, clock, fire_frame(-20.0))
+    assert fc.answer() is None
+    feed(fc, clock, fire_frame(-1.0))
+    assert fc.answer() is False
+
+
+def test_without_the_detector_a_warm_area_is_locked_only_when_the_frame_before_shows_it_too():
+    """Realistic seed 102: a top-up's first frame after a move had a warm area 20 degC over its wall that the
+    next frame did not show."""
+    clock = Clock()
+    fc = FireContrast(clock, 2.0, 0.2)
+    feed(fc, clock, fire_frame(0.0))
+    feed(fc, clock, fire_frame(20.0))
+    assert not fc.lock_on_latest(steady=True)
+    feed(fc, clock, fire_frame(20.0))
+    assert fc.lock_on_latest(steady=True)

@@ -507,7 +507,7 @@ class ExtinguishIndoorFire(AgentTask):
             c.lock_on_latest()
             c.answer()                                   # the frames so far are the hot fire's
             return True
-        if not c.locked and c.lock_on_latest():
+        if not c.locked and c.lock_on_latest(steady=True):
             self.agent.backend.loginfo(f'[{self.name}] fire {fire_id} not reported by the detector but '
                                        f'{c.locked_contrast:.1f} degC over its wall in the raw thermal image: '
                                        'seen hot, watered until it reads at its wall\'s level')

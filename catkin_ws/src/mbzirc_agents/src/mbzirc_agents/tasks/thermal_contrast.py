@@ -114,6 +114,7 @@ class FireContrast:
         self.out_contrast, self.period = out_contrast, period
         self.lock = threading.Lock()
         self.frame: Optional[np.ndarray] = None
+        self.previous: Optional[np.ndarray] = None   # the frame measured before it
         self.frame_time = -math.inf
         self.masks: Optional[tuple] = None
         self.locked_contrast = math.nan          # the contrast of the locked frame (the fire seen hot)
@@ -136,20 +137,24 @@ class FireContrast:
             if frame is None:
                 self.bad += 1
                 return
-            self.frame, self.frame_time = frame, now
+            self.previous, self.frame, self.frame_time = self.frame, frame, now
             if self.masks is not None:
                 c = contrast(frame, self.masks)
                 if math.isfinite(c):
                     self.contrasts.append(c)
 
-    def lock_on_latest(self) -> bool:
+    def lock_on_latest(self, steady: bool = False) -> bool:
         """Lock the fire on the latest frame (called while the detector sees it); False when that frame has
-        no fire that can be measured (the previous lock stays)."""
+        no fire that can be measured (the previous lock stays). steady (no detector to confirm it): the frame
+        before must show the same warm area as warm (not a frame taken while the robot turned or moved)."""
         with self.lock:
             if self.frame is None or self.now() - self.frame_time > MAX_AGE:
                 return False
-            masks = lock_masks(self.frame, LOCK_MIN_RISE * self.out_contrast)
+            min_rise = LOCK_MIN_RISE * self.out_contrast
+            masks = lock_masks(self.frame, min_rise)
             if masks is None:
+                return False
+            if steady and (self.previous is None or not contrast(self.previous, masks) >= min_rise):
                 return False
             self.masks, self.contrasts = masks, []
             self.locked_contrast = contrast(self.frame, masks)
@@ -165,10 +170,14 @@ class FireContrast:
     def answer(self) -> Optional[bool]:
         """Hot (True) or cold (False) by the contrast of the latest frame since the last answer (each answer
         a new frame; the latest, as the fire changes under the water); None without a lock, a recent frame or
-        a frame since."""
+        a frame since, and when the locked core reads more than ~out_contrast under its wall (no fire is
+        colder than its wall: the camera no longer looks at the locked area, seen when a robot backed off a
+        wall: -21 degC)."""
         with self.lock:
             values, self.contrasts = self.contrasts, []
             if self.masks is None or not values or self.now() - self.frame_time > MAX_AGE:
                 return None
             self.last = float(values[-1])
+            if self.last < -self.out_contrast:
+                return None
             return self.last > self.out_contrast
