@@ -5,6 +5,7 @@ fake backend and no ROS master; this class is the only place that makes real ROS
 """
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from typing import Any, Callable
@@ -33,6 +34,28 @@ def _publish_status_if_free(server: Any) -> None:
             server.lock.release()
 
 
+class CallSiteThrottle:
+    """Throttled logging keyed on the line of agent code that logs. rospy's *_throttle keys its period on
+    the line that calls it, which through this backend is one line for every message: a frequent message
+    (a task's progress every 2 s) silenced every other one of the same level (the clearance guard's
+    vertical-speed line never printed). Time going back (a restarted simulation) lets a line log again."""
+
+    def __init__(self, clock: Callable[[], float]) -> None:
+        self._clock = clock
+        self._last: dict[tuple[str, int], float] = {}
+
+    def due(self, period: float, depth: int = 2) -> bool:
+        """True if the caller `depth` frames up has not logged within `period` s (and records it)."""
+        frame = sys._getframe(depth)
+        key = (frame.f_code.co_filename, frame.f_lineno)
+        now = self._clock()
+        last = self._last.get(key)
+        if last is not None and last <= now < last + period:
+            return False
+        self._last[key] = now
+        return True
+
+
 class RosBackend:
     """rospy implementation of the backend used by AgentInterface and Agent.
 
@@ -42,6 +65,7 @@ class RosBackend:
     def __init__(self):
         self._scheduler = None
         self._scheduler_lock = threading.Lock()
+        self._throttle = CallSiteThrottle(rospy.get_time)
 
     def scheduler(self) -> RosTimeScheduler:
         """The agent's ROS-time scheduler (started on first use, after rospy.init_node)."""
@@ -128,10 +152,12 @@ class RosBackend:
         rospy.loginfo(msg)
 
     def loginfo_throttle(self, period: float, msg: str) -> None:
-        rospy.loginfo_throttle(period, msg)
+        if self._throttle.due(period):
+            rospy.loginfo(msg)
 
     def logerr_throttle(self, period: float, msg: str) -> None:
-        rospy.logerr_throttle(period, msg)
+        if self._throttle.due(period):
+            rospy.logerr(msg)
 
     def logerr(self, msg: str) -> None:
         rospy.logerr(msg)
