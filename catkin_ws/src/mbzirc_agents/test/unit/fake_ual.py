@@ -184,3 +184,13 @@ def start_ugv(backend, pos, params=None, speedup=8.0):
     ual = FakeUal(backend, pos=pos, speedup=speedup)
     ual.state = State.FLYING_AUTO
     return start_agent(UgvAgent('0', backend, {'region_timeout': 5.0, **(params or {})}), backend), ual
+
+
+def goal_pose(x, y, z, yaw=None, frame='arena'):
+    """A task goal's PoseStamped; without a yaw its orientation is all zero (the tasks' "no heading")."""
+    p = PoseStamped()
+    p.header.frame_id = frame
+    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
+    if yaw is not None:
+        p.pose.orientation.z, p.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    return p

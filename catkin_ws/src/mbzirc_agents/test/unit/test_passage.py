@@ -7,12 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import EnterBuildingGoal, SearchIndoorGoal, TakeOffGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav, start_ugv, stop_agent
+from fake_ual import goal_pose, start_uav, start_ugv, stop_agent
 from laser_world import LaserScene, wall_boxes
 from mbzirc_agents import constants as C
 from uav_abstraction_layer.msg import State
@@ -21,14 +20,6 @@ from uav_abstraction_layer.msg import State
 WINDOW_X, WALL_Y = 15.5, (19.3, 19.5)
 UAV_R, UGV_R = 0.35, 0.6
 DOOR_X, DOOR_WALL_Y = 14.25, (6.7, 6.9)     # facade B door, x 13.0-15.5 in the arena model
-
-
-def pose(x, y, z, yaw):
-    p = PoseStamped()
-    p.header.frame_id = 'arena'
-    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
-    p.pose.orientation.z, p.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
-    return p
 
 
 class Track:
@@ -69,7 +60,7 @@ def uav():
 
 def enter(be, timeout=120):
     s = be.servers['enter_building_action']
-    s.send(EnterBuildingGoal(floor=1, entry=pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
+    s.send(EnterBuildingGoal(floor=1, entry=goal_pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
     return s, s.wait(timeout)
 
 
@@ -445,7 +436,7 @@ def test_the_ugv_passes_an_interior_doorway_the_laser_sees_on_its_leg(ugv):
     scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 10.5), (17.7, 12.5, 17.9, 19.3)]
     track = Track(be, ual, (17.7, 17.9), UGV_R, 11.0, axis=0)
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=0, path=[pose(19.5, 11.0, 0.0, 0.0), pose(16.5, 11.0, 0.0, 0.0)]))
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(19.5, 11.0, 0.0, 0.0), goal_pose(16.5, 11.0, 0.0, 0.0)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.5 + UGV_R, 12.5 - UGV_R), (min(track.xs), max(track.xs))
@@ -470,7 +461,7 @@ def test_the_ugv_is_clear_of_a_doorway_before_its_leg_goes_on(ugv):
     # truly (18.6, 12.0), 0.1 m clear of the frame's corner for the UGV's radius: behind where the passage
     # ends (clear of the wall by the laser), so the leg goes on square to the wall from there, not back
     # towards it (where the leg guard would hold it: leg_guard.py, a 0.9 m corridor)
-    s.send(SearchIndoorGoal(floor=0, path=[pose(19.6, 11.0, 0.0, 0.0)]))
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(19.6, 11.0, 0.0, 0.0)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.0 + UGV_R, 12.0 - UGV_R), (min(track.xs), max(track.xs))
@@ -494,7 +485,7 @@ def test_a_uav_passes_a_doorway_its_oblique_leg_meets_near_the_frame(uav):
                              + (doorway_closed if z > 7.2 else []))
     track = Track(be, ual, (17.7, 17.9), UAV_R, 11.0, axis=0)
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 8.5, 6.5, math.pi)]))
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(15.7, 8.5, 6.5, math.pi)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert any('doorway' in m for m in be.infos), be.infos
     assert track.within(10.4 + UAV_R, 12.4 - UAV_R), (min(track.xs), max(track.xs))
@@ -515,7 +506,7 @@ def test_indoor_search_legs_are_flown_at_true_heights(uav, bias_z):
     be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[pose(20.5, 14.5, 6.5, math.pi)]))
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(20.5, 14.5, 6.5, math.pi)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert abs(ual.pos[2] - 6.5) < 0.2, f'true height {ual.pos[2]:.2f}, GNSS error {bias_z:+.1f}'
 
@@ -539,7 +530,7 @@ def test_going_down_to_a_legs_height_ends_at_the_height_whatever_the_wobble(uav)
             be.clock.sleep(0.05)
     be.clock.start_thread(wobble, name='wobble')
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[pose(20.5, 14.5, 6.5, math.pi)]))
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(20.5, 14.5, 6.5, math.pi)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert abs(ual.pos[2] - 6.5) < 0.2 and abs(ual.pos[0] - 20.5) < 0.3, ual.pos
 
@@ -569,7 +560,7 @@ def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav)
             be.clock.sleep(0.05)
     be.clock.start_thread(record, name='record')
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 8.9, 7.6, -math.pi / 2)]))
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(15.7, 8.9, 7.6, -math.pi / 2)]))
     assert s.wait(200) == 'succeeded', s.result.message
     stop.append(True)
     low = [p for p in track if p[2] < 7.6 - 0.3]

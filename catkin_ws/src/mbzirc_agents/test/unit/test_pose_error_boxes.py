@@ -5,11 +5,10 @@ leg's box; UAV 2 was really 0.9 m higher and UAV 3 0.8 m lower than they reporte
 """
 import numpy as np
 import pytest
-from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav, stop_agent
+from fake_ual import goal_pose, start_uav, stop_agent
 from mbzirc_agents import constants as C
 from mbzirc_agents.params import AgentParams
 from mbzirc_agents.pose_error_boxes import GROUND_ANCHORED, grown, pose_error_pad
@@ -21,14 +20,6 @@ def uav():
     agent, ual = start_uav(be, {'region_timeout': 10.0}, speedup=8.0)
     yield agent, ual, be
     stop_agent(agent, ual, be)
-
-
-def pose(x, y, z):
-    p = PoseStamped()
-    p.header.frame_id = 'arena'
-    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
-    p.pose.orientation.w = 1.0
-    return p
 
 
 def take_off(be, height):
@@ -53,7 +44,7 @@ def test_hover_box_grows_by_the_pose_error_margins(uav):
     agent, ual, be = uav
     assert take_off(be, 6.0) == 'succeeded'
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(3.0, 0.0, 6.0)))
+    s.send(GoToGoal(waypoint=goal_pose(3.0, 0.0, 6.0, 0.0)))
     assert s.wait(20) == 'succeeded'
     lo, hi = ual.regions.regions()[('2', 'hold')]
     p = agent.position()[:3]
@@ -85,7 +76,7 @@ def test_two_go_to_legs_side_by_side_keep_the_true_uavs_apart_with_opposite_hori
     x3 = 2 * h + 2 * C.POSE_ERROR_MARGIN - 0.1      # the leg (along y at x 0) needs x3 >= 2 h + 2 margin
     assert ual.regions.ask('3', 'hold', *grown(((x3 - h, 4.0, 5.0), (x3 + h, 6.0, 7.0)), pad))[0]
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(0.0, 10.0, 6.0)))
+    s.send(GoToGoal(waypoint=goal_pose(0.0, 10.0, 6.0, 0.0)))
     be.clock.sleep(1.5)
     assert any(f.state == 'WAITING_REGION' for f in s.feedback)
     assert abs(ual.pos[1]) < 0.1

@@ -5,12 +5,11 @@ waited the whole trial for a go_to box that overlapped the other's hold box.
 """
 import numpy as np
 import pytest
-from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
 from mbzirc_comm_objs.srv import AskForRegionRequest
 
 from fake_backend import FakeBackend
-from fake_ual import FakeUal, start_agent, stop_agent
+from fake_ual import FakeUal, goal_pose, start_agent, stop_agent
 from mbzirc_arena.boxes import boxes_overlap
 from mbzirc_agents import constants as C
 from mbzirc_agents.region_yield import step_aside_targets
@@ -33,14 +32,6 @@ def two_uavs():
     stop_agent(agent, ual, be)
 
 
-def pose(x, y, z):
-    p = PoseStamped()
-    p.header.frame_id = 'arena'
-    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
-    p.pose.orientation.w = 1.0
-    return p
-
-
 def manager_step(be, rm):
     """What the region manager node does at its timer: find a deadlock, ask the victim, report its answer."""
     order = rm.deadlock()
@@ -61,7 +52,7 @@ def test_two_uavs_each_waiting_for_the_others_hold_box_no_longer_wait_forever(tw
     assert s.wait(20) == 'succeeded'
     assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
     go = be.servers['go_to_action']
-    go.send(GoToGoal(waypoint=pose(0.0, 8.0, 6.0)))          # northwards across UAV 3's hold
+    go.send(GoToGoal(waypoint=goal_pose(0.0, 8.0, 6.0, 0.0)))          # northwards across UAV 3's hold
     orders, granted_at = [], None
     for _ in range(120):                                      # 60 s: UAV 3 retries at 2 Hz, the manager at 2 Hz
         if rm.ask('3', 'go_to', *UAV3_GO_TO)[0]:
@@ -97,7 +88,7 @@ def test_every_step_taken_by_others_the_uav_stays_and_waits_on(two_uavs):
                              ((1.8, -1, 5), (4.5, 1, 7)), ((-1, -1, 8.5), (1, 1, 10)))):
         assert rm.ask('1', f'x{i}', *box)[0]
     go = be.servers['go_to_action']
-    go.send(GoToGoal(waypoint=pose(0.0, 8.0, 6.0)))
+    go.send(GoToGoal(waypoint=goal_pose(0.0, 8.0, 6.0, 0.0)))
     orders = []
     for _ in range(20):
         assert not rm.ask('3', 'go_to', *UAV3_GO_TO)[0]

@@ -1,13 +1,11 @@
 """UAV tasks against a fake kinematic UAL (no ROS): take-off, regions, preemption, bad goals."""
-import math
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import PoseStamped
 from mbzirc_comm_objs.msg import GoToGoal, Object, ObjectList, TakeOffGoal, ExtinguishFacadeFireGoal, LandGoal
 
 from fake_backend import FakeBackend
-from fake_ual import start_uav, stop_agent
+from fake_ual import goal_pose, start_uav, stop_agent
 from mbzirc_agents import constants as C
 
 
@@ -17,15 +15,6 @@ def uav():
     agent, ual = start_uav(be, speedup=8.0)
     yield agent, ual, be
     stop_agent(agent, ual, be)
-
-
-def pose(x, y, z, yaw=None, frame='arena'):
-    p = PoseStamped()
-    p.header.frame_id = frame
-    p.pose.position.x, p.pose.position.y, p.pose.position.z = x, y, z
-    if yaw is not None:
-        p.pose.orientation.z, p.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
-    return p
 
 
 def take_off(be, h=3.0):
@@ -62,7 +51,7 @@ def test_go_to_waits_for_region_of_another_agent(uav):
     assert take_off(be) == 'succeeded'
     assert ual.regions.ask('3', 'hold', (4, -1, 2), (6, 1, 4))[0]      # another UAV on the way
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(10, 0, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(10, 0, 3)))
     be.clock.sleep(1.0)
     assert any(f.state == 'WAITING_REGION' for f in s.feedback)
     assert np.linalg.norm(ual.pos[:2]) < 0.1                            # did not move
@@ -77,7 +66,7 @@ def test_go_to_around_the_building_never_crosses_it(uav):
     assert take_off(be, 3.0) == 'succeeded'
     ual.waypoints.clear()
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(30, 24, 3)))     # beyond the tower's far corner
+    s.send(GoToGoal(waypoint=goal_pose(30, 24, 3)))     # beyond the tower's far corner
     assert s.wait(20) == 'succeeded'
     from mbzirc_arena.routing import segment_hits_rect as _segment_hits_rect
     pts = [np.zeros(2)] + [w[0][:2] for w in ual.waypoints]
@@ -87,8 +76,8 @@ def test_go_to_around_the_building_never_crosses_it(uav):
             assert not _segment_hits_rect(a, b, bld[:4])
 
 
-@pytest.mark.parametrize('goal,words', [(pose(float('nan'), 0, 3), 'NaN'), (pose(500, 0, 3), 'outside'),
-                                        (pose(1, 1, 3, frame='map'), 'frame')])
+@pytest.mark.parametrize('goal,words', [(goal_pose(float('nan'), 0, 3), 'NaN'), (goal_pose(500, 0, 3), 'outside'),
+                                        (goal_pose(1, 1, 3, frame='map'), 'frame')])
 def test_go_to_bad_goals(uav, goal, words):
     _, _, be = uav
     s = be.servers['go_to_action']
@@ -100,7 +89,7 @@ def test_preempted_go_to_stops_the_uav(uav):
     agent, ual, be = uav
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
     be.clock.sleep(1.0)
     s.preempt = True
     assert s.wait(5) == 'preempted'
@@ -141,9 +130,9 @@ def test_data_feed_and_cost(uav):
     feed = agent.data_feed()
     assert feed.agent_id == '2' and feed.robot_type == 'uav' and feed.is_idle
     from mbzirc_comm_objs.srv import GetCostToGoToRequest
-    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=pose(3, 4, 0))).cost == \
+    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=goal_pose(3, 4, 0))).cost == \
         pytest.approx(5.0, abs=0.01)
-    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=pose(float('nan'), 4, 0))).cost == -1
+    assert be.services['get_cost_to_go_to'](GetCostToGoToRequest(waypoint=goal_pose(float('nan'), 4, 0))).cost == -1
 
 
 def _beating(agent, period=0.1):
@@ -166,17 +155,17 @@ def test_heartbeat_loss_aborts_task_and_rejects_goals(uav):
     beat = _beating(agent)
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
     be.clock.sleep(0.2)
     beat.set()                               # the central unit dies; the agent's own watchdog notices
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
-    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(0, 0, 3)))
     assert s.wait(5) == 'aborted' and 'heartbeat' in s.result.message
     beat = _beating(agent)
     deadline = be.clock.now() + 2.0        # the agent's 10 Hz wall-clock watchdog sees it
     while not agent.accepting and be.clock.now() < deadline:
         be.clock.sleep(0.05)
-    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(0, 0, 3)))
     assert s.wait(10) == 'succeeded'
     beat.set()
 
@@ -226,7 +215,7 @@ def test_gnss_jump_is_doubted_and_the_uav_holds(uav):
     be.clock.sleep(3.0 * agent.p.pose_jump_hold)
     assert not agent.pose_in_doubt()
     assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
-    nan = pose(float('nan'), 0.0, 3.0, 0.0)
+    nan = goal_pose(float('nan'), 0.0, 3.0, 0.0)
     agent._on_pose(nan)
     assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
     assert any('NaN' in e for e in be.errors)
@@ -250,11 +239,11 @@ def test_exception_in_a_task_ends_that_task_not_the_agent(uav):
     agent, ual, be = uav
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(-15, 30, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
     be.clock.sleep(0.2)
     agent.inject_fault()
     assert s.wait(5) == 'aborted' and 'fault injected' in s.result.message
-    s.send(GoToGoal(waypoint=pose(0, 0, 3)))
+    s.send(GoToGoal(waypoint=goal_pose(0, 0, 3)))
     assert s.wait(20) == 'succeeded'
 
 
@@ -355,7 +344,7 @@ def test_go_to_a_point_inside_the_building_from_outside_is_refused(uav):
     agent, ual, be = uav
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=pose(26.5, 18.8, 1.0)))
+    s.send(GoToGoal(waypoint=goal_pose(26.5, 18.8, 1.0)))
     assert s.wait(10) == 'aborted' and 'inside the building outline' in s.result.message
     assert ual.pos[0] < 11.0
 
