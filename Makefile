@@ -24,6 +24,8 @@ BAG ?=
 UNCERTAINTY ?= ideal
 INDOOR_SLAM ?=
 GNSS_DENIED_INDOORS ?=
+WORLD ?=
+INDOOR_SEARCH ?= plan
 
 .PHONY: setup build mission replay test test-faults bench lint clean
 setup:
@@ -34,7 +36,7 @@ build: setup
 mission: setup
 	@bash tools/run_mission.sh SEED=$(SEED) UAVS=$(UAVS) RTF=$(RTF) RECORD=$(RECORD) SUMMARY=$(SUMMARY) \
 	  GCS=$(GCS) GCS_PORT=$(GCS_PORT) UNCERTAINTY=$(UNCERTAINTY) INDOOR_SLAM=$(INDOOR_SLAM) \
-	  GNSS_DENIED_INDOORS=$(GNSS_DENIED_INDOORS)
+	  GNSS_DENIED_INDOORS=$(GNSS_DENIED_INDOORS) WORLD=$(WORLD) INDOOR_SEARCH=$(INDOOR_SEARCH)
 
 replay: setup
 	@source env.sh && rosrun mbzirc_ground_station replay $(if $(BAG),"$(BAG)") --port $(GCS_PORT)

@@ -7,17 +7,19 @@
 #                        [GNSS_DENIED_INDOORS=|0|1]   (no GNSS inside buildings, ual_sim README "No GNSS indoors";
 #                         empty: as the uncertainty profile says; 1 turns INDOOR_SLAM on unless it is given:
 #                         the agents then fly indoors on the SLAM pose, mbzirc_agents README "Pose source")
+#                        [WORLD=path.yaml]   (a ual_sim world; default: ual_sim's C3 world)
+#                        [INDOOR_SEARCH=plan|explore]   (mbzirc_launchers README, c3_sim.launch arg indoor_search)
 # Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
 # mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
 # port so it never clashes with another roscore on this machine.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
-INDOOR_SLAM=""; GNSS_DENIED_INDOORS=""
+INDOOR_SLAM=""; GNSS_DENIED_INDOORS=""; WORLD=""; INDOOR_SEARCH=plan
 SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
-    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*|INDOOR_SLAM=*|GNSS_DENIED_INDOORS=*) declare "$kv" ;;
+    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*|INDOOR_SLAM=*|GNSS_DENIED_INDOORS=*|WORLD=*|INDOOR_SEARCH=*) declare "$kv" ;;
     *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
   esac
 done
@@ -25,6 +27,10 @@ done
   || { echo "run_mission.sh: SEED must be an integer, UAVS 0..3, RTF a number" >&2; exit 2; }
 [[ "$UNCERTAINTY" =~ ^(ideal|realistic)$ ]] \
   || { echo "run_mission.sh: UNCERTAINTY must be ideal or realistic, got '$UNCERTAINTY'" >&2; exit 2; }
+[[ "$INDOOR_SEARCH" =~ ^(plan|explore)$ ]] \
+  || { echo "run_mission.sh: INDOOR_SEARCH must be plan or explore, got '$INDOOR_SEARCH'" >&2; exit 2; }
+[ -z "$WORLD" ] || [ -f "$WORLD" ] || { echo "run_mission.sh: WORLD: no such file '$WORLD'" >&2; exit 2; }
+[ -z "$WORLD" ] || WORLD="$(realpath "$WORLD")"
 [[ "$GNSS_DENIED_INDOORS" =~ ^(|0|1)$ && "$INDOOR_SLAM" =~ ^(|0|1)$ ]] \
   || { echo "run_mission.sh: GNSS_DENIED_INDOORS and INDOOR_SLAM must be 0 or 1 (or empty)" >&2; exit 2; }
 denied=""; [ "$GNSS_DENIED_INDOORS" = 1 ] && denied=true; [ "$GNSS_DENIED_INDOORS" = 0 ] && denied=false
@@ -44,12 +50,13 @@ PORT="$(python -c 'import socket; s=socket.socket(); s.bind(("localhost", 0)); p
 export ROS_MASTER_URI="http://localhost:$PORT" ROS_HOSTNAME=localhost
 export ROS_LOG_DIR="$OUT/ros_logs"
 LOG="$OUT/launch.log"
-echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, indoor SLAM $INDOOR_SLAM, GNSS denied indoors ${denied:-as the profile}, record $record -> $OUT (master port $PORT)"
+echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, indoor SLAM $INDOOR_SLAM, GNSS denied indoors ${denied:-as the profile}, indoor search $INDOOR_SEARCH, world ${WORLD:-default}, record $record -> $OUT (master port $PORT)"
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
   duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" \
-  indoor_slam:="$([ "$INDOOR_SLAM" = 1 ] && echo true || echo false)" gnss_denied_indoors:="$denied" > "$LOG" 2>&1 &
+  indoor_slam:="$([ "$INDOOR_SLAM" = 1 ] && echo true || echo false)" gnss_denied_indoors:="$denied" \
+  world:="$WORLD" indoor_search:="$INDOOR_SEARCH" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
 GCS_PID=""
 if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own launch: it never ends the trial)
