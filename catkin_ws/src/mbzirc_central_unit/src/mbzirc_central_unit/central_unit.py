@@ -28,7 +28,7 @@ from .goal_timeouts import GoalClock
 from .layout import INDOOR_SEARCHES, Layout, explored_layout, load_world
 from .operator import OperatorGate
 from .strategy import Command, Strategy, StrategyParams
-from .world_model import AgentView, FireView, WorldView, fire_kind
+from .world_model import AgentView, FireView, WorldView, facade_floor, fire_kind
 
 ACTION_TYPES = {
     C.TAKE_OFF: "TakeOff", C.LAND: "Land", C.GO_TO: "GoTo", C.FOLLOW_PATH: "FollowPath", C.HOVER: "Hover",
@@ -114,6 +114,7 @@ class CentralUnit:
             uavs_take_ground_floor_indoors=bool(rospy.get_param("~uavs_take_ground_floor_indoors", False)),
         )
         self.strategy = Strategy(params)
+        self.facade_holders = params.layout.facade_holders
         self.operator = OperatorGate(bool(rospy.get_param("~wait_for_start", False)))   # operator.py
         self.operator_services = self.operator.advertise()
         self.lock = threading.Lock()
@@ -208,7 +209,9 @@ class CentralUnit:
             if not _finite(p.x, p.y, p.z):
                 rospy.logerr_throttle(5.0, f"central_unit: estimated object {o.id} has a non-finite pose: ignored")
                 continue
-            fires[o.id] = FireView(o.id, p.x, p.y, p.z, fire_kind(o.sub_type, p.x, p.y, p.z), o.status)
+            kind = fire_kind(o.sub_type, p.x, p.y, p.z)
+            storey = facade_floor((p.x, p.y, p.z), self.facade_holders) if kind == C.KIND_FACADE else None
+            fires[o.id] = FireView(o.id, p.x, p.y, p.z, kind, o.status, holder_floor=storey)
         with self.lock:
             self.fires = fires
 

@@ -63,10 +63,11 @@ class FireView:
     z: float
     kind: str
     status: int = C.STATUS_ACTIVE
+    holder_floor: Optional[int] = None   # a facade fire's storey, from its known holder (`facade_floor`)
 
     @property
     def floor(self) -> int:
-        return floor_of(self.z)
+        return self.holder_floor if self.holder_floor is not None else floor_of(self.z)
 
     @property
     def position(self) -> tuple[float, float, float]:
@@ -92,6 +93,18 @@ def fire_kind(sub_type: int, x: float, y: float, z: float) -> str:
     if sub_type not in KIND_OF_SUBTYPE:
         sub_type = arena_classify_fire((x, y, z))
     return KIND_OF_SUBTYPE[sub_type]
+
+
+def facade_floor(position: tuple[float, float, float], holders: list[tuple[float, ...]]) -> Optional[int]:
+    """The storey of the known facade holder nearest a facade fire's estimate (None without holders).
+
+    Rule: a facade fire burns in one of the holders a team knows, so its storey is that holder's, not the
+    storey its estimated height falls in: the estimate carries the pose error (GNSS height off by about half
+    a metre), and a holder half a metre above a storey's floor height is then read on the storey below."""
+    if not holders:
+        return None
+    nearest_holder = min(holders, key=lambda h: math.dist(position, h[:3]))
+    return floor_of(nearest_holder[2])
 
 
 DUPLICATE_RADIUS = 2.0  # m

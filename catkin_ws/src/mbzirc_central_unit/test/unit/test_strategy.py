@@ -9,7 +9,7 @@ from fake_mission import FakeMission, TRUE_FIRES
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit import geometry as G
 from mbzirc_central_unit.strategy import Strategy, StrategyParams
-from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, fire_kind
+from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, facade_floor, fire_kind
 
 
 def _tasks(cmds):
@@ -192,6 +192,23 @@ def test_extinguished_fires_and_their_stray_tracks_are_not_targets():
     cmds = s.decide(WorldView(0.0, {"2": a}, fires))
     assert all(c.task in (C.FOLLOW_PATH, C.GO_HOME_AND_REFILL) and c.target in (None, ("transit", None))
                for c in cmds)
+
+
+def test_realistic_102_a_facade_fire_read_low_stays_on_its_holders_storey_and_the_storey_below_is_searched():
+    layout_holders = StrategyParams().layout.facade_holders
+    c_3 = (11.4, 14.5, 10.5)                       # a floor-2 holder, 0.5 m above the storey's floor height
+    estimate = (11.6, 14.4, 9.9)                   # its fire's estimate with the GNSS height 0.6 m low
+    assert c_3 in [tuple(h[:3]) for h in layout_holders]
+    assert facade_floor(estimate, layout_holders) == 2
+    assert facade_floor(estimate, []) is None
+    out = FireView(7, *estimate, C.KIND_FACADE, C.STATUS_EXTINGUISHED,
+                   holder_floor=facade_floor(estimate, layout_holders))
+    assert out.floor == 2
+    s = Strategy(StrategyParams())
+    world = WorldView(0.0, {}, {7: out})
+    assert world.extinguished_on(C.KIND_FACADE, 2) and not world.extinguished_on(C.KIND_FACADE, 1)
+    # before: the fire counted on floor 1, whose facade was then never searched (one fire per storey)
+    assert 1 in s.water.facade_floors_open(world)
 
 
 def test_fire_kind_by_position_when_the_estimator_gives_no_subtype():
