@@ -36,8 +36,8 @@ class Bookkeeping:
                                       params.max_blocked_legs)
         self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
         self.notes: list[str] = []  # log lines of the failure rules, taken by the node (take_notes)
-        # explored layouts (no interior walls known): the room (floor, index) each agent last entered, and
-        # the room whose search found each indoor fire; the way to a fire and out is through that window
+        # the room (floor, index) each agent last entered, and the room whose search found each indoor fire:
+        # the way to a fire is through that room (IndoorPhase.room_to_reach), and out through that window
         self.entered: dict[str, tuple[int, Any]] = {}
         self.fire_rooms: dict[int, tuple[int, Any]] = {}
 
@@ -58,7 +58,7 @@ class Bookkeeping:
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
                 if cmd.task == C.SEARCH_INDOOR and isinstance(cmd.target, tuple) \
-                        and isinstance(cmd.target[1], int):
+                        and all(isinstance(k, int) for k in cmd.target):   # a room's (floor, index)
                     for i in result["fire_ids"]:
                         self.fire_rooms.setdefault(int(i), cmd.target)
             if cmd.task == C.ENTER_BUILDING:

@@ -70,7 +70,7 @@ class IndoorPhase(Decider):
                                    ("view", fire.fire_id))
                 return Command(a.agent_id, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
                                f"water on indoor fire {fire.fire_id}, floor {floor}", fire.fire_id)
-            idx = self._room_of(floor, fire, there)
+            idx = self.room_to_reach(floor, fire)
             if idx is None:
                 return None
             return self._to_room(a, floor, idx, rooms[idx], inside, f"to indoor fire {fire.fire_id}")
@@ -86,13 +86,19 @@ class IndoorPhase(Decider):
                            f"searching floor {floor} indoors (room {idx})", (floor, idx))
         return self._to_room(a, floor, idx, room, inside, f"to search room {idx}")
 
-    def _room_of(self, floor: int, fire: FireView, there) -> Optional[int]:
-        """The room to reach a fire through: with an explored layout (no walls known) the room whose search
-        found it, when known (the nearest window may open on the other side of a wall); else the layout's."""
+    def room_to_reach(self, floor: int, fire: FireView) -> Optional[int]:
+        """The room to reach an indoor fire through (None: no room reaches it, not a target).
+
+        Rule: the room whose search found the fire, when known: it was seen from there. Else the room of its
+        viewpoint (the holder's side of its wall), else the room that sees the estimate. Never the estimate
+        alone first: on a wall's line, a GNSS error of a few decimetres puts it on the other side or inside
+        the wall, where no room sees it (explored layouts: the nearest window may open on the wall's other
+        side)."""
         found = self.book.fire_rooms.get(fire.fire_id)
-        if self.p.layout.explored and found is not None and found[0] == floor:
+        if found is not None and found[0] == floor:
             return found[1]
-        return self.p.layout.room_for(floor, there)
+        view = self._viewpoint_of(floor, fire)
+        return self.p.layout.room_for(floor, view[:3] if view is not None else fire.position)
 
     def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:
         """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire; None

@@ -69,7 +69,7 @@ class WaterDecider(Decider):
         # 2. an indoor fire already known on a floor I own or nobody owns.
         indoor = [f for f in self._confirmed(world.fires_of(C.KIND_INDOOR)) if f.floor in self.indoor.uav_floors(world)
                   and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
-                  and self.p.layout.room_for(f.floor, f.position) is not None]
+                  and self.indoor.room_to_reach(f.floor, f) is not None]
         if indoor:
             f = nearest(a, indoor)
             return (C.KIND_INDOOR, f.floor, f)

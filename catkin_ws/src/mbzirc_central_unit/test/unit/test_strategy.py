@@ -8,6 +8,7 @@ from fake_mission import FakeMission, TRUE_FIRES
 
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit import geometry as G
+from mbzirc_central_unit.command import Command
 from mbzirc_central_unit.strategy import Strategy, StrategyParams
 from mbzirc_central_unit.world_model import AgentView, FireView, WorldView, facade_floor, fire_kind
 
@@ -209,6 +210,27 @@ def test_realistic_102_a_facade_fire_read_low_stays_on_its_holders_storey_and_th
     assert world.extinguished_on(C.KIND_FACADE, 2) and not world.extinguished_on(C.KIND_FACADE, 1)
     # before: the fire counted on floor 1, whose facade was then never searched (one fire per storey)
     assert 1 in s.water.facade_floors_open(world)
+
+
+def _in_floor2_east_room(fire_x):
+    uav = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 19.9, 16.5, 11.5, ual_state=C.UAL_FLYING_AUTO,
+                    water_level=2.0, last_seen=0.0)
+    return WorldView(0.0, {"3": uav}, {20: FireView(20, fire_x, 16.5, 11.5, C.KIND_INDOOR)})
+
+
+def test_realistic_107_an_indoor_fire_estimated_in_its_wall_is_put_out_from_the_room_that_found_it():
+    """The east room's fire on the interior wall (its east face at x 17.9), estimated 0.2 m into the wall:
+    no room sees that point. Before: not a target, the UAV beside it left the floor for other work."""
+    s = Strategy(StrategyParams())
+    found = Command("3", C.SEARCH_INDOOR, {"floor": 2, "path": []}, "searching floor 2 indoors (room 1)", (2, 1))
+    s.on_sent(found)
+    s.on_result(found, True, {"fire_ids": [20]}, now=0.0)
+    s.book.pending_ids.clear()
+    [cmd] = s.decide(_in_floor2_east_room(17.7))
+    assert cmd.task == C.EXTINGUISH_INDOOR_FIRE and cmd.goal["fire_id"] == 20, cmd
+    # with no search on record, the holder's viewpoint still puts it in the east room
+    [cmd] = Strategy(StrategyParams()).decide(_in_floor2_east_room(17.7))
+    assert cmd.task == C.EXTINGUISH_INDOOR_FIRE, cmd
 
 
 def test_fire_kind_by_position_when_the_estimator_gives_no_subtype():
