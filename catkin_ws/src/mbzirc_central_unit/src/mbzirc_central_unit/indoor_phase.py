@@ -14,7 +14,9 @@ from .transit import at, inside_tower
 from .ugv_decider import DOOR
 from .world_model import AgentView, FireView, WorldView
 
-VIEWPOINT_TOL = 0.7  # m: an agent this close to an indoor holder's viewpoint puts the fire out from there
+# m: an agent this close to an indoor holder's viewpoint, horizontally (its reported height is off the flown one
+# by the vertical GNSS error, transit.exit_path), puts the fire out from there
+VIEWPOINT_TOL = 0.7
 VIEWPOINT_MAX_DIST = 3.0  # m between a fire track and the viewpoint (2 m in front of its holder) used for it
 
 
@@ -61,7 +63,7 @@ class IndoorPhase(Decider):
             view = self._viewpoint_of(floor, fire)
             there = view[:3] if view is not None else fire.position
             if inside and layout.clear_indoors(floor, a.position, there):
-                if view is not None and math.dist(a.position, view[:3]) > VIEWPOINT_TOL \
+                if view is not None and math.dist(a.position[:2], view[:2]) > VIEWPOINT_TOL \
                         and self.book.ok(a, C.SEARCH_INDOOR, ("view", fire.fire_id)):
                     # water along the wall's normal: from anywhere else the jet meets the wall at a slant
                     # and the estimate's error sends most of it beside the container

@@ -103,7 +103,9 @@ class Router:
         # fire of the floor, so a longer path could end inside. First to the point inside the window
         # where the way out starts, then straight out through it.
         start = room.exit_start
-        if math.dist(a.position, start) > 0.6:
+        # horizontally only: indoors the agents fly heights by the altimeter, so the reported (GNSS) height
+        # stays off the commanded one by the vertical GNSS error, and a 3D test never saw the UAV arrive
+        if math.dist(a.position[:2], start[:2]) > 0.6:
             return [(*start, back)]
         return [(e[0], e[1], e[2], back)]
 

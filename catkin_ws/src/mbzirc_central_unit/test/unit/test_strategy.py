@@ -330,6 +330,18 @@ def test_exit_from_the_building_is_one_straight_waypoint_at_a_time():
     assert cmd.task == C.SEARCH_INDOOR and math.dist(cmd.goal["path"][0][:3], room.entry[:3]) < 1e-6
 
 
+def test_realistic_107_a_uav_at_the_way_outs_start_with_its_reported_height_off_goes_on_out():
+    """Indoors the agents fly heights by the altimeter: the reported (GNSS) height stays off the commanded
+    one by the vertical GNSS error. Before: the central unit sent the same first waypoint 20 times (2 min)."""
+    s = Strategy()
+    room = s.p.layout.rooms[2][1]
+    x, y, z = room.exit_start
+    a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, x + 0.2, y, z + 0.6, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=0.0, last_seen=0.0)
+    cmd = s.decide(WorldView(0.0, {"3": a}, {}))[0]
+    assert cmd.task == C.SEARCH_INDOOR and math.dist(cmd.goal["path"][0][:3], room.entry[:3]) < 1e-6, cmd
+
+
 def test_the_way_out_starts_deeper_inside_than_the_way_in_ended():
     """Realistic seed 103: the move to 1.5 m inside facade C's window, a metre off on GNSS, put a leaving
     UAV into the wall's inner face. The way out starts 2.5 m inside, on the window's normal."""
