@@ -12,7 +12,8 @@ from mbzirc_comm_objs.srv import CheckFireResponse
 from laser_world import ANGLE_MIN, BEAMS, INC, cast, wall_boxes
 from mbzirc_agents.leg_guard import blocking_distance, corridor_distances
 from mbzirc_arena.laser import scan_points
-from test_passage import UAV_R, WALL_Y, enter, pose, ugv, uav  # noqa: F401 - fixtures: a UGV, a UAV
+from fake_ual import goal_pose
+from test_passage import UAV_R, WALL_Y, enter, ugv, uav  # noqa: F401 - fixtures: a UGV, a UAV
 
 UGV_R = 0.6                                   # ual_sim's radius: what the tests' true tracks must keep off
 INNER_X = (17.7, 17.9)                        # the ground floor's interior wall (doorway not in the model)
@@ -110,7 +111,7 @@ def test_realistic_seed_106_the_ugv_holds_before_the_interior_wall_and_fails(ugv
     scene.boxes = wall_boxes(0.9) + inner
     closest = Closest(be, ual, inner)
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=0, path=[pose(19.5, 11.0, 0.0, 0.0)]))
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(19.5, 11.0, 0.0, 0.0)]))
     assert s.wait(200) == 'aborted', s.result.message
     closest.stop = True
     assert 'laser return' in s.result.message and 'blocks the leg' in s.result.message, s.result.message
@@ -126,7 +127,7 @@ def test_a_ugv_leg_into_a_wall_a_metre_ahead_does_not_start(ugv):
     scene.shift = (0.0, 0.0)
     scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 19.3)]    # no doorway
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=0, path=[pose(15.5, 14.0, 0.0, math.pi)]))
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(15.5, 14.0, 0.0, math.pi)]))
     assert s.wait(200) == 'aborted', s.result.message
     assert 'blocks the leg' in s.result.message, s.result.message
     assert ual.pos[0] > 18.9 - 0.15, f'moved on to {ual.pos}'
@@ -143,7 +144,7 @@ def test_a_straight_ugv_leg_through_a_doorway_goes_on(ugv):
     scene.shift = (0.0, 0.0)
     scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 10.0), (17.7, 12.0, 17.9, 19.3)]
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=0, path=[pose(15.5, 11.0, 0.0, math.pi)]))
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(15.5, 11.0, 0.0, math.pi)]))
     assert s.wait(200) == 'succeeded', s.result.message
     assert agent.p.leg_guard
     assert ual.pos[0] < 16.0, ual.pos
@@ -160,7 +161,7 @@ def test_a_uav_indoor_leg_into_a_wall_stops_and_fails(uav):
     scene.boxes = lambda z: wall_boxes(z) + [(17.7, 6.9, 17.9, 19.3)]
     closest = Closest(be, ual, [(17.7, 6.9, 17.9, 19.3)])
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[pose(15.7, 14.5, 6.5, math.pi)]))
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(15.7, 14.5, 6.5, math.pi)]))
     assert s.wait(200) == 'aborted', s.result.message
     closest.stop = True
     assert 'blocks the leg' in s.result.message, s.result.message
