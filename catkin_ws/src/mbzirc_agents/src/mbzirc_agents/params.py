@@ -94,6 +94,9 @@ class AgentParams:
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
     downward_camera_fov: float = _param(33.0, 'degrees, field of view of the downward thermal camera (the '
                                         "TeraRanger Evo Thermal 33's datasheet): sets the ground it covers")
+    forward_camera_fov: float = _param(33.0, 'degrees, field of view of the forward thermal camera (the '
+                                       "TeraRanger Evo Thermal 33's datasheet): turns a warm area's pixel into "
+                                       'a bearing when the detector no longer reports the fire')
     ground_fire_search_radius: float = _param(2.0, "m around a ground fire's estimate searched with the "
                                               'downward camera when it does not see the fire from over it '
                                               '(the GNSS errors of the UAV and of whoever placed the fire)')

@@ -567,3 +567,58 @@ def test_a_sun_heated_walls_slope_is_not_a_fire_for_a_top_up(scenes):
     s = sc.extinguish()
     assert s.status == 'aborted' and 'not seen hot from the watering pose' in s.result.message, s.result.message
     assert sc.statuses == []
+
+
+class DriftingFire:
+    """A fire that water reaches only while the UAV's heading is within 2 deg of it: `need` L put in then; a raw
+    contrast to its wall of `heat` deg C untouched, fading with the water in; the detector reports it while that
+    contrast is over `seen_share` of its heat. Once the detector has lost it, the fire's bearing from the UAV
+    moves to `drift_deg` (the UAV pushed sideways by the drift of its GNSS error) and the raw image shows it
+    there (its pixel column by the camera's 33 deg field of view)."""
+
+    def __init__(self, sc, need, start_water, heat=60.0, seen_share=0.45, drift_deg=8.0):
+        self.sc, self.need, self.heat, self.seen_share = sc, need, heat, seen_share
+        self.drift = math.radians(drift_deg)
+        self.received, self.last_water, self.lost = 0.0, start_water, False
+        sc.ual.water = start_water
+        rng = np.random.default_rng(5)
+        focal = 16.0 / math.tan(math.radians(16.5))
+        sc.hot = lambda: self.contrast() > seen_share * heat
+        sc.ual.thermal = lambda: fake_thermal.fire_frame(
+            self.contrast(), rng=rng, centre=(15.5, 15.5 - focal * math.tan(self.bearing() - sc.ual.yaw)))
+
+    def bearing(self):
+        return self.drift if self.lost else 0.0
+
+    def contrast(self):
+        water = self.sc.ual.water
+        if abs(math.remainder(self.sc.ual.yaw - self.bearing(), 2 * math.pi)) < math.radians(2.0):
+            self.received += max(0.0, self.last_water - water)
+        self.last_water = water
+        c = self.heat * max(0.0, 1.0 - self.received / self.need)
+        self.lost = self.lost or c <= self.seen_share * self.heat
+        return c
+
+
+def test_realistic_101_103_108_a_frozen_aim_follows_the_warm_area_of_the_raw_image_onto_a_fire_it_drifted_off(
+        scenes):
+    """Realistic benchmark on 6b5ecb7: once the detector lost the fire the aim was frozen, the UAV drifted with
+    its GNSS error, and tank after tank missed a fire the raw image still saw 15-25 degC over its wall (left at
+    0.27, 0.88, 0.67). Now the frozen heading turns onto the raw image's warm area: the fire gets its water."""
+    sc = scenes(hot_until=1.0)
+    fire = DriftingFire(sc, need=4.0, start_water=8.0)
+    s = sc.extinguish(timeout=60)
+    assert fire.lost
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert fire.received >= fire.need, f'judged out after {fire.received:.2f} L of {fire.need:.2f}'
+
+
+def test_a_frozen_aim_without_the_raw_image_steering_leaves_a_fire_it_drifted_off_for_a_top_up(scenes):
+    """The test above can fail: with the raw image unable to turn the frozen aim (a field of view so narrow that
+    the warm area's bearing is within the aim's tolerance), the water misses and the tank runs dry."""
+    sc = scenes(hot_until=1.0, params={'forward_camera_fov': 0.5})
+    fire = DriftingFire(sc, need=4.0, start_water=8.0)
+    s = sc.extinguish(timeout=60)
+    assert fire.lost
+    assert s.status == 'succeeded' and not s.result.extinguished, s.result.message
+    assert fire.received < fire.need

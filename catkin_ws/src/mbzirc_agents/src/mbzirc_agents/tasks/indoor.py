@@ -23,7 +23,7 @@ from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path
 from .explore import Exploration, footprint_here
 from .passage import LaserPassage, crosses_outline
 from .sensing import SensedObjects
-from .thermal_contrast import FireContrast
+from .thermal_contrast import FireContrast, pixel_bearing
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
@@ -31,6 +31,7 @@ AIM_TRIES = 6              # turns (and climbs) to the hot spot before pumping, 
 AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
 AIM_MAX_AGE = 0.5          # s: an older detection no longer turns the robot while it pumps
+RAW_TURN_SETTLE = 0.5      # s after a turn on the raw image before a frame may turn the robot again
 FROZEN_HEIGHT_STEP = 0.02  # m: a frozen aim's height set-point is re-sent when it moved this much
 RAW_THERMAL_TOPIC = 'teraranger_evo_thermal/raw_temp_array'   # the thermal camera's 32 x 32 deg C
 
@@ -217,6 +218,7 @@ class ExtinguishIndoorFire(AgentTask):
         self.watering_z: Optional[float] = None          # the height the watering pose was reached at
         self.on_jet = True                               # the last sighting's height correction was all sent
         self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
+        self.raw_turn_time = -math.inf                    # when the frozen aim last turned on the raw image
         self.contrast = FireContrast(agent.backend.now, agent.p.out_contrast, agent.p.thermal_period)
         self.iface.add_subscriber(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
                                   lambda msg: self.contrast.on_frame(msg.data))
@@ -431,6 +433,7 @@ class ExtinguishIndoorFire(AgentTask):
         soak = Soak(a.p.soak_fraction, a.p.soak_min_time)
         frozen, first_level = False, None
         self.frozen_true_z = None
+        self.raw_turn_time = -math.inf
         try:
             a.start_pump()
             start = a.backend.now()
@@ -457,6 +460,7 @@ class ExtinguishIndoorFire(AgentTask):
                 self.sleep(0.5)
                 if frozen:
                     self._hold_frozen_height(pose[3])
+                    pose[3] = self._steer_on_raw_image(pose[3])
                 else:
                     pose[3] = self._keep_aim(pose[3])
                 if self.aim_z is not None:
@@ -557,6 +561,30 @@ class ExtinguishIndoorFire(AgentTask):
             self.frozen_true_z = self.aim_z - e
         a.backend.loginfo(f'[{self.name}] the detector no longer sees the fire: aim frozen at {self.aim_z:.2f} m '
                           '(GNSS), ' + ('held by the altimeter' if e is not None else 'no altimeter estimate: set-point held'))
+
+    def _steer_on_raw_image(self, yaw: float) -> float:
+        """While the aim is frozen (the detector no longer reports the fire): the heading turned onto the warm
+        area of the raw thermal image when it is ~aim_bearing_tolerance or more off it (~forward_camera_fov
+        turns its pixel into a bearing), from a frame taken RAW_TURN_SETTLE s or more after the last such turn.
+        The locked pixels no longer hold the fire then: they are dropped and the fire is locked again on the
+        next steady frames (until then no answer counts, hot or cold). Why: a UAV holds its GNSS set-point, so
+        the drift of its GNSS error moves it sideways off where it watered from and the frozen jet off the fire
+        (tenths of a metre in tens of seconds), while the raw image still sees the fire 15-25 degC over its
+        wall; the height stays held by the altimeter (`_hold_frozen_height`)."""
+        a = self.agent
+        spot = self.contrast.warm_spot()
+        if spot is None or spot[2] < self.raw_turn_time + RAW_TURN_SETTLE:
+            return yaw
+        bearing = pixel_bearing(spot[0], a.p.forward_camera_fov)
+        if abs(bearing) < a.p.aim_bearing_tolerance:
+            return yaw
+        new_yaw = float(a.pose_at(spot[2])[3]) + bearing
+        self._turn_in_place(new_yaw)
+        self.raw_turn_time = a.backend.now()
+        self.contrast.clear()
+        a.backend.loginfo_throttle(2.0, f'[{self.name}] frozen aim turned {math.degrees(bearing):+.1f} deg onto '
+                                        'the warm area of the raw thermal image')
+        return new_yaw
 
     def _hold_frozen_height(self, yaw: float) -> None:
         """The frozen aim's height set-point follows the altimeter's estimate of the vertical GNSS error, so

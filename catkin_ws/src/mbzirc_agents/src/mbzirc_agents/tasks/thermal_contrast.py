@@ -104,6 +104,23 @@ def contrast(frame: np.ndarray, masks: tuple) -> float:
     return float(hot.mean() - wall[np.isfinite(flat[core.ravel()])].mean())
 
 
+def warm_spot(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
+    """(column, row) of the centroid of the frame's warm core (`lock_masks`), pixel 0's centre = 0; None when
+    nothing stands min_rise over its wall."""
+    masks = lock_masks(frame, min_rise)
+    if masks is None:
+        return None
+    rows, cols = np.nonzero(masks[0])
+    return float(cols.mean()), float(rows.mean())
+
+
+def pixel_bearing(column: float, fov_deg: float) -> float:
+    """rad off the optical axis, positive to the left (a counter-clockwise turn), of a pixel column of the
+    32-px-wide image (the detector's placement rule: fire_detector geometry.forward_fire_position)."""
+    focal = (FRAME_SIZE / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
+    return math.atan2(-(column - (FRAME_SIZE - 1) / 2.0), focal)
+
+
 class FireContrast:
     """Raw thermal frames in (`on_frame`, at most one every `period` s is processed), the locked fire's
     contrast out (`answer`): True while it stands more than `out_contrast` above its wall, False at the noise
@@ -159,6 +176,15 @@ class FireContrast:
             self.masks, self.contrasts = masks, []
             self.locked_contrast = contrast(self.frame, masks)
             return True
+
+    def warm_spot(self) -> Optional[tuple]:
+        """(column, row, frame time) of the latest recent frame's warm core (standing LOCK_MIN_RISE x
+        ~out_contrast over its wall), None without one."""
+        with self.lock:
+            if self.frame is None or self.now() - self.frame_time > MAX_AGE:
+                return None
+            spot = warm_spot(self.frame, LOCK_MIN_RISE * self.out_contrast)
+            return None if spot is None else (*spot, self.frame_time)
 
     @property
     def locked(self) -> bool:
