@@ -94,6 +94,8 @@ class AgentParams:
     blanket_release_height: float = _param(1.5, 'm above the fire where the blanket is released')
     downward_camera_fov: float = _param(33.0, 'degrees, field of view of the downward thermal camera (the '
                                         "TeraRanger Evo Thermal 33's datasheet): sets the ground it covers")
+    detector_wait: float = _param(30.0, 's a look goes on waiting for a thermal detector that has not answered '
+                                  'once yet (it starts after the agent on a loaded machine) before the search fails')
     forward_camera_fov: float = _param(33.0, 'degrees, field of view of the forward thermal camera (the '
                                        "TeraRanger Evo Thermal 33's datasheet): turns a warm area's pixel into "
                                        'a bearing when the detector no longer reports the fire')

@@ -44,5 +44,23 @@ def test_a_ugv_already_inside_searches_back_the_way_it_came(ugv_inside):
 def test_a_search_whose_thermal_camera_never_answers_fails(ugv_inside):
     """No CheckFire service (a detector started late under load): the search must not report 'no fire'."""
     agent, ual, be = ugv_inside
+    agent.p.detector_wait = 2.0
     s, outcome = search(be)
     assert outcome == 'aborted' and 'does not answer' in s.result.message, s.result.message
+
+
+def test_ideal_5_a_look_waits_for_a_detector_that_starts_late(ugv_inside):
+    """The UGV's detector came up 25 sim-s after the UGV's first look: three searches failed at once on it,
+    the UGV gave the ground floor up and its fire burned the whole trial. The look now waits for the first
+    answer (~detector_wait): the search ends normally."""
+    agent, ual, be = ugv_inside
+    up_at = be.clock.now() + 25.0
+
+    def late_detector(_req):
+        if be.clock.now() < up_at:
+            raise RuntimeError('service [/mbzirc2020_0/thermal_detection/fire_detected] unavailable')
+        return CheckFireResponse(fire_detected=False)
+
+    be.handlers['thermal_detection/fire_detected'] = late_detector
+    s, outcome = search(be)
+    assert outcome == 'succeeded' and 'no indoor fire found' in s.result.message, s.result.message
