@@ -31,10 +31,19 @@ def run(robot, task, action, wall_timeout=120.0, feedback=None, **fields):
     goal = getattr(M, f'{action}Goal')(**fields)
     # actionlib's wait_for_server() can return before the server's goal subscriber has connected to our
     # publisher, and a goal sent in that gap is silently lost (a known race, seen on a loaded machine).
-    # A goal that nobody acknowledged (no status at all) within 5 s is therefore sent again, at most twice.
+    # A goal that nobody acknowledged (no status, feedback or result at all) within 10 s is therefore sent
+    # again, at most twice. (5 s was too short on a loaded machine: a 5-s blanket drop's result arrived just
+    # after it, the goal was sent again and failed 'no blanket attached'.)
+    heard = []
+
+    def on_feedback(f):
+        heard.append(f)
+        if feedback is not None:
+            feedback(f)
+
     for _ in range(3):
-        c.send_goal(goal, feedback_cb=feedback)
-        if wait_wall(lambda: c.simple_state != actionlib.SimpleGoalState.PENDING, 5.0):
+        c.send_goal(goal, feedback_cb=on_feedback)
+        if wait_wall(lambda: heard or c.simple_state != actionlib.SimpleGoalState.PENDING, 10.0):
             break
     if not wait_wall(lambda: done(c), wall_timeout):
         c.cancel_goal()

@@ -26,12 +26,17 @@ class TestUavFires(unittest.TestCase):
         floor0 = [f for f in self.sim.fires.fires if f.kind == 0 and f.floor == 0]
         active = [f for f in floor0 if f.active][0]
         cold = [f for f in floor0 if not f.active][0]
-        state, res = run(2, 'take_off', 'TakeOff', 60, height=3.0)
+        state, res = run(2, 'take_off', 'TakeOff', 60, height=4.0)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         path = []
         for f in (cold, active):          # the cold holder first: the UAV must skip it
             (x, y, z), yaw = facade_standoff((f.position.x, f.position.y, f.position.z), C.BUILDINGS, 2.0)
             path.append(pose(x, y, z, yaw))
+        # to the floor at altitude first, as the central unit's transit does: a leg from over the pads down
+        # to the first standoff spans, with its pose-error margin, the neighbour parked on its pad
+        first = path[0].pose.position
+        state, res = run(2, 'go_to', 'GoTo', 120, waypoint=pose(first.x, first.y, 4.0, 0.0))
+        self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         fb = []
         state, res = run(2, 'search_facade', 'SearchFacade', 200, floor=0, path=path,
                          feedback=lambda f: fb.append((f.state, f.message)))
