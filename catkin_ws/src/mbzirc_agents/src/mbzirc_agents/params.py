@@ -63,7 +63,7 @@ class AgentParams:
     max_vertical_speed: float = _param(1.2, 'm/s, vertical (read by no task yet: the UAL limits the climb rate)')
     tank_capacity: float = _param(2.0, 'L, a full tank (refilled means 95 % of it)')
     water_empty: float = _param(0.05, 'L under which the tank is empty')
-    cruise_altitude: float = _param(3.5, 'm go_home_and_refill climbs to at least, before flying home: its boxes '
+    cruise_altitude: float = _param(4.0, 'm go_home_and_refill climbs to at least, before flying home: its boxes '
                                     '(grown by the pose error) then clear the parked UAVs\' (pose_error_boxes.py)')
     parked_half_size: float = _param(0.75, 'm: a landed UAV keeps the box x, y +- this, z 0..parked_height')
     parked_height: float = _param(2.0, 'm, top of the parked box above the ground')
@@ -71,7 +71,7 @@ class AgentParams:
     reland_after: float = _param(20.0, 's landed at home without the reset before landing on the pad again '
                                        '(the GNSS landing may miss it)')
     reland_attempts: int = _param(2, 'landings again on the pad before the last ~refill_timeout wait (0: none)')
-    reland_height: float = _param(3.5, 'm of the take-off before landing on the pad again (its hold box clears '
+    reland_height: float = _param(4.0, 'm of the take-off before landing on the pad again (its hold box clears '
                                   'the neighbours\' parked boxes, as ~cruise_altitude)')
     home_landing_offset: float = _param(0.5, "m off its pad's centre a UAV aims its landing, away from the other "
                                         "UAVs' pads (tasks/uav_motion.landing_spot): about the GNSS error of one "

@@ -16,7 +16,7 @@ columns grown sideways would overlap the neighbours' parked boxes for as long as
 take-off or a landing refused for good). The parked box does not grow at all: a landed UAV stands on its
 pad, on the ground (its box reaches ~parked_height above the ground). So a UAV's own boxes clear the parked
 boxes from 2 m + hold box + pose error up: take-offs before landing again (~reland_height) and the flight
-home (~cruise_altitude) go at least that high (3.5 m).
+home (~cruise_altitude) go at least that high (3.5 m; 4 m by default, for the height held).
 
 The hold box at the top of the take-off column is placed over the pad too (x, y of the column, z of the
 take-off's target), grown in z only: grown sideways around the reported pose it overlapped the neighbours'
