@@ -43,13 +43,20 @@ class WaterDecider(Decider):
         return self.indoor.step(a, floor, fire)
 
     def facade_floors_open(self, world: WorldView) -> list[int]:
-        """Facade floors whose fire is not out yet and that still deserve a search or a fire job."""
+        """Facade floors whose fire is not out yet and that still deserve a search or a fire job.
+
+        Rule (one facade fire per storey, as `extinguished_on` assumes): a floor whose fire was found and then
+        watered until it was not seen hot (probably out, failure_rules.py) is done like one whose fire is out;
+        searching its facade again finds nothing new (realistic runs: 50-105 s per such second search, before
+        the indoor floors). The fire itself is still revisited at the end (`_job`, 4.)."""
         out = []
         for f in self.p.floor_priority:
             if world.extinguished_on(C.KIND_FACADE, f):
                 continue
-            if self._confirmed(world.fires_of(C.KIND_FACADE, f)) \
-                    or self.book.facade_searches[f] < self.p.facade_searches:
+            fires = world.fires_of(C.KIND_FACADE, f)
+            if self._confirmed(fires):
+                out.append(f)
+            elif not fires and self.book.facade_searches[f] < self.p.facade_searches:
                 out.append(f)
         return out
 

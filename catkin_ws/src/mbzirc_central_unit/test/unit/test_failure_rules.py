@@ -185,3 +185,23 @@ def test_a_room_whose_legs_a_uav_finds_blocked_is_tried_three_times_backed_off_a
     # the fire there, found meanwhile, is put out from its viewpoint (another target)
     assert any(c.task == C.EXTINGUISH_INDOOR_FIRE and c.target == 7 and ok for c, ok in m.log)
     assert any("given up by this robot" in n for n in m.strategy.take_notes())
+
+
+def test_a_facade_floor_whose_fire_is_probably_out_gets_no_second_search_before_the_indoor_floors():
+    """Realistic 102, 106, 107 and the benchmark's 101, 102: a floor's facade fire found by its first search and
+    watered until not seen hot twice (it was out each time) made the floor 'open' again, and a water UAV flew a
+    second search of that facade (50-105 s, twice in 106) before the indoor floors; in 107 a UAV that had just
+    entered floor 2 to search its last room left it at once for that search. The fire found is the floor's
+    fire: the floor is done like one whose fire is out; the fire itself is still revisited at the end."""
+    s = Strategy(StrategyParams())
+    for floor in (0, 1, 2):
+        s.book.facade_searches[floor] = 1               # every facade floor searched once
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)
+    assert s.probably_out(7)
+    world = _uav_world(C.STATUS_EXTINGUISHED)           # floor 2's fire out; floor 0 has no fire known
+    assert 1 not in s.water.facade_floors_open(world)   # before: [0, 1], floor 1 searched again
+    assert 0 in s.water.facade_floors_open(world)       # a floor whose fire was never found keeps its search
+    cmds = s.decide(world)
+    assert not [c for c in cmds if c.task == C.SEARCH_FACADE and c.target == 1], cmds
+    assert not [c for c in cmds if c.target == ("transit", 1) and "via the elevator" in c.reason], cmds
