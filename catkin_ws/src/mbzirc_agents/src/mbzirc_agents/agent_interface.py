@@ -37,9 +37,9 @@ class AgentInterface:
             self._active.append(task_name)
             demands = list(self._demands.get(task_name, []))
         subs = []
-        for topic, msg_type in demands:
+        for topic, msg_type, callback in demands:
             try:
-                subs.append((topic, self.backend.subscriber(topic, msg_type, lambda _msg: None)))
+                subs.append((topic, self.backend.subscriber(topic, msg_type, self._guarded(topic, callback))))
             except Exception as e:  # noqa: BLE001 - a producer switched off costs time, not the task
                 self.backend.logerr(f'{task_name}: could not subscribe to {topic}: {e!r}')
         if subs:
@@ -61,15 +61,31 @@ class AgentInterface:
         if unregisters:
             self.backend.start_thread(f'{task_name}: closing demands', lambda: [u() for u in unregisters])
 
-    def add_demand(self, task_name: str, topic: str, msg_type: Any) -> None:
-        """Subscribe to topic only while task_name runs, to switch on a lazy producer.
+    def add_demand(self, task_name: str, topic: str, msg_type: Any,
+                   callback: Optional[Callable[[Any], None]] = None) -> None:
+        """Subscribe to topic only while task_name runs; its messages go to callback (None: dropped).
 
         Why: a lazy node (circle_detector ~lazy) works only while one of its outputs has a subscriber, and
-        the always-on `sensed_objects` cannot say so (the estimator listens to it all the time). The
-        subscription carries no data to the task; its existence is the request.
+        the always-on `sensed_objects` cannot say so (the estimator listens to it all the time): there the
+        subscription's existence is the request. And a heavy topic only one task reads (the raw thermal
+        image, 14 frames a sim-second per robot) costs its deserialisation in every frame of the trial when
+        subscribed for good (`add_subscriber`), though the task runs a small part of it.
         """
         with self._lock:
-            self._demands.setdefault(task_name, []).append((topic, msg_type))
+            self._demands.setdefault(task_name, []).append((topic, msg_type, callback))
+
+    def _guarded(self, topic: str, callback: Optional[Callable[[Any], None]]) -> Callable[[Any], None]:
+        """callback, its exceptions logged (throttled) instead of raised in the subscriber's thread."""
+        if callback is None:
+            return lambda _msg: None
+
+        return lambda msg: self._call(topic, callback, msg)
+
+    def _call(self, topic: str, callback: Callable[[Any], None], msg: Any) -> None:
+        try:
+            callback(msg)
+        except Exception as e:   # a bad message must not kill the subscriber thread
+            self.backend.logerr_throttle(5.0, f'callback for {topic} failed: {e!r}')
 
     def demanded_topics(self) -> List[str]:
         """Topics subscribed now because a running task demands them."""
@@ -105,10 +121,7 @@ class AgentInterface:
             names = [None] + list(self._active)
             callbacks = [cb for n in names for cb in entry['callbacks'].get(n, [])]
         for cb in callbacks:
-            try:
-                cb(msg)
-            except Exception as e:   # a bad message must not kill the subscriber thread
-                self.backend.logerr_throttle(5.0, f'callback for {topic} failed: {e!r}')
+            self._call(topic, cb, msg)
 
     def add_publisher(self, topic: str, msg_type: Any, latch: bool = False) -> Any:
         """The (shared) publisher of topic."""

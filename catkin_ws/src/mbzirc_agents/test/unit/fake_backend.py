@@ -49,6 +49,17 @@ class FakeServer:
         self.feedback.append(fb)
 
 
+class FakeSubscription:
+    """What backend.subscriber returns: unregister() stops the messages (as rospy.Subscriber's)."""
+
+    def __init__(self, subs, topic, cb):
+        self.subs, self.topic, self.cb = subs, topic, cb
+
+    def unregister(self):
+        if self.subs.get(self.topic) is self.cb:
+            del self.subs[self.topic]
+
+
 class FakeBackend:
     def __init__(self):
         self.clock = SimClock()
@@ -63,7 +74,9 @@ class FakeBackend:
         self.handlers = {}          # service name -> callable(request) for service_proxy
 
     def subscriber(self, topic, msg_type, cb):
+        """Messages of topic go to cb (self.subs[topic]) until the returned subscription is unregistered."""
         self.subs[topic] = cb
+        return FakeSubscription(self.subs, topic, cb)
 
     def publisher(self, topic, msg_type, latch=False):
         self.pubs[topic] = []

@@ -250,6 +250,23 @@ def test_demand_subscribes_only_while_the_task_runs():
     assert made == ['circle_detection/middle_hole'] * 2
 
 
+def test_a_demands_messages_go_to_its_callback_only_while_its_task_runs():
+    """add_demand with a callback: a heavy topic one task reads is subscribed (and deserialised) only then; a
+    callback that raises is logged, the subscriber goes on."""
+    be = FakeBackend()
+    iface = AgentInterface(be)
+    got = []
+    iface.add_demand('water', 'raw', object, lambda m: got.append(1 / m))
+    assert 'raw' not in be.subs
+    iface.push_active('water')
+    be.subs['raw'](2)
+    be.subs['raw'](0)                      # ZeroDivisionError: logged
+    assert got == [0.5] and be.errors and 'ZeroDivisionError' in be.errors[-1]
+    iface.pop_active('water')
+    be.clock.sleep(0.1)                    # the demand is closed in a thread of its own
+    assert 'raw' not in be.subs
+
+
 def test_a_task_ends_even_when_closing_its_demand_hangs():
     """Unregistering tells the ROS master, which a robot whose link is cut cannot reach: the call hangs. The
     task must end all the same (a permanently cut UAV stayed in extinguish_facade_fire and never went home)."""

@@ -79,6 +79,20 @@ def test_water_flows_until_the_fire_reads_cold_several_times(scenes):
     assert used >= 0.4 * (1.0 + 0.5 * (C.COLD_CHECKS - 1)) * 0.8, f'only {used:.2f} L pumped'
 
 
+def test_the_raw_thermal_image_is_subscribed_only_while_the_task_runs(scenes):
+    """Each raw frame a subscriber gets is deserialised (14 a sim-second per robot): the task that reads them
+    subscribes when it starts and unregisters when it ends, so an agent pays for them only then."""
+    sc = scenes(hot_until=1.0)
+    assert fake_thermal.TOPIC not in sc.be.subs, 'subscribed before the task runs'
+    seen = []
+    sc.ual.thermal = (lambda f=sc.ual.thermal: seen.append(fake_thermal.TOPIC in sc.be.subs) or f())
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    sc.be.clock.sleep(0.5)                 # the subscription is closed in a thread of its own
+    assert fake_thermal.TOPIC not in sc.be.subs, 'still subscribed after the task ended'
+    assert any(seen)
+
+
 @pytest.mark.parametrize('std', [0.2, 0.75])
 def test_a_fire_never_seen_hot_from_the_watering_pose_is_not_judged_out(scenes, std):
     """A confirmed, well-localised track that reads cold gets ~top_up_time of water (a fire being filled reads

@@ -223,8 +223,9 @@ class ExtinguishIndoorFire(AgentTask):
         self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
         self.raw_turn_time = -math.inf                    # when the frozen aim last turned on the raw image
         self.contrast = FireContrast(agent.backend.now, agent.p.out_contrast, agent.p.thermal_period)
-        self.iface.add_subscriber(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
-                                  lambda msg: self.contrast.on_frame(msg.data))
+        # subscribed only while the task runs: each frame of the trial deserialised for nothing otherwise
+        self.iface.add_demand(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
+                              lambda msg: self.contrast.on_frame(msg.data))
 
     def _wall_points(self) -> Optional[np.ndarray]:
         """The laser's returns for the wall clearance; None when it is off or without a fresh scan (said)."""
