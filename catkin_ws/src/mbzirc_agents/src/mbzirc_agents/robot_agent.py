@@ -20,7 +20,7 @@ from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegio
                                   SetObjectStatusRequest)
 from sensor_msgs.msg import NavSatStatus
 from std_msgs.msg import Bool, Float32, Header, String
-from mbzirc_arena.boxes import Box, box_text, boxes_overlap, check_point, make_box, swept_box
+from mbzirc_arena.boxes import Box, box_text, boxes_overlap, check_point, make_box
 from mbzirc_arena.c3 import ARENA
 from mbzirc_ros_utils.liveness import HeartbeatFilter
 from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
@@ -35,7 +35,7 @@ from .agent_task import AgentTask, TaskError, TaskPreempted
 from .params import AgentParams
 from .pose_source import NONE, PoseSource
 from .pose_error_boxes import grown, pose_error_pad
-from .region_yield import STEP_LABEL, step_aside_targets
+from .region_yield import STEP_LABEL, step_aside_moves
 
 
 # m: a held go-to set-point is sent to the UAL again once the UAL-to-arena offset moved this far since it was
@@ -608,10 +608,12 @@ class RobotAgent(Agent):
         """m (x, y, z) our box `label` is grown by on each side for the error of our reported pose."""
         return pose_error_pad(label, self.p.pose_error_margin, self.p.pose_error_margin_z, over_pad)
 
-    def _ask(self, label: str, box: Box, over_pad: bool = False) -> tuple:
+    def _ask(self, label: str, box: Box, over_pad: bool = False, as_held: bool = False) -> tuple:
         """One ask_for_region of box grown by our pose error (pose_error_boxes.py; over_pad: x, y are a
-        pad's): (granted, why not); a granted box is remembered in `held` as the manager holds it."""
-        box = grown(box, self.pose_error_pad(label, over_pad))
+        pad's; as_held: box is already as the manager holds it, e.g. a held box moved): (granted, why not);
+        a granted box is remembered in `held` as the manager holds it."""
+        if not as_held:
+            box = grown(box, self.pose_error_pad(label, over_pad))
         try:
             if not self.ask_srv(self._region_request(label, box)).success:
                 return False, 'occupied by another agent'
@@ -622,7 +624,7 @@ class RobotAgent(Agent):
         return True, ''
 
     def reserve(self, task: AgentTask, label: str, box: Any, timeout: Optional[float] = None,
-                over_pad: bool = False) -> None:
+                over_pad: bool = False, as_held: bool = False) -> None:
         """Ask for box under label until granted (2 Hz); TaskError after timeout s.
 
         While it waits, the region manager may ask this robot to step aside out of another robot's
@@ -636,7 +638,7 @@ class RobotAgent(Agent):
         try:
             while True:
                 task.check_preempt()
-                ok, why = self._ask(label, box, over_pad)
+                ok, why = self._ask(label, box, over_pad, as_held)
                 if ok:
                     return
                 with self._regions_lock:
@@ -715,23 +717,27 @@ class RobotAgent(Agent):
         in_the_way = sorted(l for l, b in held.items() if boxes_overlap(b, box))
         if in_the_way != ['hold']:
             return f'our boxes in the way: {in_the_way or "none"}'
-        if not self._step_targets(box):
+        if not self._step_moves(box):
             return 'no free place to step to'
         return ''
 
-    def _step_targets(self, box: Box) -> list:
-        # the hover box as the manager will hold it at the target: grown by our pose error
-        hold_half = self.p.hold_half_size + self.pose_error_pad('hold')
-        return step_aside_targets(self.position(wait=0.0), hold_half, box, self.arena, C.BUILDINGS,
-                                  self.p.building_clearance, self.p.step_aside_min_z, self.p.step_aside_max)
+    def _step_moves(self, box: Box) -> list:
+        """(target, step box, new hover box) of the steps out of box (region_yield.step_aside_moves): our hover
+        box as the manager holds it, moved along one axis (over a pad it is not grown sideways)."""
+        with self._regions_lock:
+            held = self.held.get('hold')
+        if held is None:     # (not reached: a yield is accepted only with the hold in the way) grown here
+            here = self.position(wait=0.0)
+            held = grown(self.hold_box(here), self.pose_error_pad('hold'))
+        return step_aside_moves(self.position(wait=0.0), held, box, self.arena, C.BUILDINGS,
+                                self.p.building_clearance, self.p.step_aside_min_z, self.p.step_aside_max)
 
     def _step_aside(self, task: AgentTask, winner: str, label: str, box: Box) -> bool:
         """Move the hover box out of box (robot winner's refused request `label`): reserve the step (our
         hold to the new place), fly it, hold there. False (and a log) when no step is granted."""
         here = self.position()
-        for target in self._step_targets(box):
-            step = swept_box(here[:3], target, self.p.hold_half_size)
-            if not self._ask(STEP_LABEL, step)[0]:
+        for target, step, new_hold in self._step_moves(box):
+            if not self._ask(STEP_LABEL, step, as_held=True)[0]:
                 continue
             self.backend.logwarn(f'stepping aside from {np.round(here[:3], 2)} to {np.round(target, 2)}: out of '
                                  f'{winner}/{label} {box_text(box)} (a deadlock)')
@@ -739,7 +745,7 @@ class RobotAgent(Agent):
             # the step box is freed only once the hold is ours where the UAV stopped: a step cut short
             # (preempted, timed out) leaves the UAV inside boxes it holds
             self.move_to(task, target, None, 'stepping aside')
-            self.reserve(task, 'hold', self.hold_box(self.position()), timeout=10.0)
+            self.reserve(task, 'hold', new_hold, timeout=10.0, as_held=True)
             self.free(STEP_LABEL)
             return True
         self.backend.logwarn(f'cannot step out of {winner}/{label} {box_text(box)}: no step granted')

@@ -130,3 +130,51 @@ def test_step_targets_shortest_first_inside_the_arena_and_never_near_a_wall():
                              C.ARENA_BOX, C.BUILDINGS, 1.5, 2.0, 2.5)
     assert [tuple(np.round(t, 2)) for t in low] == [(-2.3, 0.0, 2.5), (2.3, 0.0, 2.5), (0.0, -2.3, 2.5),
                                                     (0.0, 2.3, 2.5)]
+
+
+# Realistic seed 108 (t 15-378 s): UAV 1 hovered over its pad (-2, 1.65) at its transit altitude (reported
+# z 4.5) and UAV 2 over its pad (0, 0) at z 7.3; their hold boxes, placed over the pads and grown in z only
+# (pose_error_boxes.py), touched at x -1 and overlapped in z by 0.2 m. Each one's go_to overlapped the
+# other's hold: a deadlock. UAV 2 (lower priority) accepted every order, but its step box, swept around its
+# reported pose and grown 0.75 m sideways, overlapped UAV 1's hold where its own hold did not: 'no step
+# granted', twenty times, and the blanket UAV never flew.
+UAV1_HOLD_108 = ((-3.0, 0.65, 3.0), (-1.0, 2.65, 6.0))
+UAV1_GO_TO_108 = ((-11.5, 0.6, 2.5), (-0.3, 9.6, 5.9))
+
+
+@pytest.fixture
+def seed_108():
+    """UAV 2 (the agent under test, lower priority) at its pad; UAV 1 scripted."""
+    be = FakeBackend()
+    rm = RegionManager(known_agents=['1', '2'], priority=['1', '2'], clock=be.clock.now)
+    ual = FakeUal(be, speedup=8.0, regions=rm)
+    from mbzirc_agents.uav_agent import UavAgent
+    agent = start_agent(UavAgent('2', be, {'region_timeout': 60.0}), be)
+    yield agent, ual, be, rm
+    stop_agent(agent, ual, be)
+
+
+def test_seed_108_uav_over_its_pad_steps_out_of_the_neighbours_box_by_its_held_hold_box(seed_108):
+    agent, ual, be, rm = seed_108
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=7.3))
+    assert s.wait(20) == 'succeeded'
+    assert rm.ask('1', 'hold', *UAV1_HOLD_108)[0]              # side by side: the holds only touch
+    go = be.servers['go_to_action']
+    go.send(GoToGoal(waypoint=goal_pose(30.0, 0.0, 7.5, 0.0)))  # eastwards: its box overlaps UAV 1's hold
+    orders, granted_at = [], None
+    for _ in range(120):
+        if rm.ask('1', 'go_to', *UAV1_GO_TO_108)[0]:
+            granted_at = be.clock.now()
+            break
+        got = manager_step(be, rm)
+        if got:
+            orders.append(got)
+        be.clock.sleep(0.5)
+    assert granted_at is not None, f'UAV 1 waited for ever (orders: {[(o.victim, ok) for o, ok in orders]}, ' \
+                                   f'warnings: {be.warns[-3:]})'
+    regions = rm.regions()
+    assert not boxes_overlap(regions[('2', 'hold')], regions[('1', 'go_to')])
+    assert ('2', 'step_aside') not in regions
+    # straight up over its pad, by the shortest step (0.4 m + the clearance)
+    assert np.hypot(ual.pos[0], ual.pos[1]) < 0.3 and 7.5 < ual.pos[2] < 8.2
