@@ -29,6 +29,12 @@ Rules added because the table is shared by every robot and trusted by all of the
   held (each one's request overlaps the next one's hold) for `deadlock_after_s`, the lowest-priority robot
   of the cycle is named to leave the box the robot waiting for it asked for. An order is not repeated for
   `yield_retry_s`, nor is another robot of the same cycle named meanwhile unless the victim declined.
+  When the cycle still stands after that, the robot of it named fewer times yet is named first (ties: the
+  lowest priority), so the robots of a standing cycle take turns: an accepted order may not be carried
+  out (the victim finds no step granted), and asking the same robot again and again never helped
+  (realistic seed 108: UAV 2 accepted 18 orders in 360 s, none carried out, UAV 1 was never asked).
+  The turns are forgotten `3 x yield_retry_s` after a pair's last order: a new cycle starts from the
+  priority again.
 """
 from __future__ import annotations
 
@@ -103,6 +109,7 @@ class RegionManager:
         self.wait_clock = wait_clock or clock
         self._refused: Dict[Tuple[str, str], Refused] = {}
         self._orders: Dict[Tuple[str, str], Tuple[float, bool]] = {}   # (victim, winner) -> (time, declined)
+        self._turns: Dict[Tuple[str, str], Tuple[int, float]] = {}      # (victim, winner) -> (orders, last)
 
     # ---- rules ------------------------------------------------------------------------------------
     def is_known(self, agent_id: str) -> bool:
@@ -186,15 +193,19 @@ class RegionManager:
             cycle = find_cycle(waits)
             if cycle is None:
                 return None
-            orders = yield_candidates(cycle, self.priority)
+            self._turns = {pair: v for pair, v in self._turns.items() if now - v[1] < 3.0 * self.yield_retry_s}
+            orders = sorted(yield_candidates(cycle, self.priority),     # stable: priority among equals
+                            key=lambda o: self._turns.get((o.victim, o.winner), (0, now))[0])
             recent = {pair: v for pair, v in self._orders.items() if now - v[0] < self.yield_retry_s}
             self._orders = recent
             if any(not declined for (victim, winner), (_, declined) in recent.items()
                    if any(o.victim == victim and o.winner == winner for o in orders)):
                 return None                   # a robot of this cycle is stepping aside: give it time
             for order in orders:
-                if (order.victim, order.winner) not in recent:
-                    self._orders[(order.victim, order.winner)] = (now, False)
+                pair = (order.victim, order.winner)
+                if pair not in recent:
+                    self._orders[pair] = (now, False)
+                    self._turns[pair] = (self._turns.get(pair, (0, now))[0] + 1, now)
                     return order
             return None
 

@@ -15,7 +15,8 @@ Rules:
 - The victim is the agent of the cycle with the lowest priority (last in the priority list; agents not in
   it come after, by id): it is asked to leave the refused box of the agent that waits for it (its
   predecessor in the cycle), the winner. When it cannot (it declines: not hovering, in a passage, no free
-  place), the next-lowest is asked, and so on.
+  place), the next-lowest is asked, and so on. When the cycle still stands after an order (accepted but
+  not carried out), the robot of it named fewer times yet comes first (core.py: the robots take turns).
 """
 from __future__ import annotations
 

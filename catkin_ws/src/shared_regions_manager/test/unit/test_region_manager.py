@@ -252,3 +252,28 @@ def test_unknown_agents_never_take_part_in_a_deadlock():
         rm.ask('ghost', 'go_to', (1, 0, 0), (11, 2, 2))
         clock.t += 0.5
     assert rm.deadlock() is None
+
+
+def test_an_order_accepted_but_not_carried_out_names_the_other_agent_next():
+    """Realistic seed 108: the victim (UAV 2) accepted every order but found no step granted, and the cycle
+    stood 360 s; the manager asked UAV 2 again every yield_retry and never UAV 1, which could have moved.
+    When the same cycle still stands after an accepted order's yield_retry, the robot asked fewer times is
+    named next (ties: the lower priority)."""
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['0', '1', '2', '3'], clock=clock, yield_retry_s=20.0)
+    seed_104_cycle(rm, clock)
+    first = rm.deadlock()
+    rm.yield_answer(first, accepted=True)                  # accepted, then no step granted: nothing moved
+    seed_104_cycle(rm, clock, seconds=20.0)
+    second = rm.deadlock()
+    assert (first.victim, second.victim, second.winner) == ('3', '2', '3')
+    rm.yield_answer(second, accepted=True)
+    seed_104_cycle(rm, clock, seconds=20.0)
+    assert rm.deadlock().victim == '3'                     # each asked once: the lower priority again
+    # a cycle standing again long after the last order starts from the priority again
+    rm2 = RegionManager(known_agents=['2', '3'], clock=clock, yield_retry_s=20.0)
+    seed_104_cycle(rm2, clock)
+    rm2.yield_answer(rm2.deadlock(), accepted=True)
+    clock.t += 200.0
+    seed_104_cycle(rm2, clock)
+    assert rm2.deadlock().victim == '3'
