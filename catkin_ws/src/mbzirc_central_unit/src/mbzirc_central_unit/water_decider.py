@@ -64,6 +64,11 @@ class WaterDecider(Decider):
         """(kind, floor, fire or None) of the next job of a water UAV, in strategy order."""
         aid = a.agent_id
         owners = self.owners
+        # 0. the room just entered is searched before anything else: a room's search takes 5-20 s, out
+        #    through the window and back in again later 60-100 s
+        entered = self._room_just_entered(a, world)
+        if entered is not None:
+            return (C.KIND_INDOOR, entered, None)
         # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first); fires
         #    probably out (failure_rules.py) only when nothing else is left (4.)
         facade = self._confirmed(world.fires_of(C.KIND_FACADE))
@@ -114,6 +119,21 @@ class WaterDecider(Decider):
             f = nearest(a, late)
             return (f.kind, f.floor, f)
         return None
+
+    def _room_just_entered(self, a: AgentView, world: WorldView) -> Optional[int]:
+        """The floor of the room this UAV just came into (its last task entered it) while that room is the
+        next one to search there (the one IndoorPhase.step searches) and no known fire waits on that floor
+        (the fire comes first: step 2); None otherwise."""
+        last = self.book.last_done.get(a.agent_id)
+        if last is None or last.task != C.ENTER_BUILDING or not isinstance(last.target, tuple):
+            return None
+        floor, idx = last.target
+        left = [i for i in self.indoor.rooms_to_search(floor) if self.indoor.room_ok(a, floor, i)]
+        if not left or left[0] != idx or floor not in self.indoor.floors_open(world) \
+                or self._confirmed(world.fires_of(C.KIND_INDOOR, floor)) \
+                or not self.owners.free_for(floor, a.agent_id, world):
+            return None
+        return floor
 
     def _confirmed(self, fires: list[FireView]) -> list[FireView]:
         """Fires not marked probably out after repeated 'not seen hot' aborts (failure_rules.py)."""

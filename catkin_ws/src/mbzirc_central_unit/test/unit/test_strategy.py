@@ -489,3 +489,25 @@ def test_a_transit_starting_near_the_ground_climbs_first():
     first = cmd.goal["path"][0]
     assert first[:2] == (23.7, 21.5) and first[2] >= 1.5
     assert all(p[2] >= 1.5 for p in cmd.goal["path"])
+
+
+def test_a_room_just_entered_is_searched_before_the_uav_leaves_for_other_work():
+    """Ideal seeds 2 and 4, realistic 107 and 103 (benchmark): a UAV that had just come in through a window to
+    search a room left at once for a facade fire of another floor or an indoor fire elsewhere, and the room was
+    searched a minute or more later by a UAV flying there again (a room's search takes 5-20 s; out through the
+    window and back in again 60-100 s). Rule: the room just entered is searched first."""
+    s = Strategy(StrategyParams())
+    room = s.p.layout.rooms[2][0]
+    enter = Command("3", C.ENTER_BUILDING, {"floor": 2, "entry": room.entry},
+                    "entering floor 2 through the window (to search room 0)", (2, 0))
+    s.on_sent(enter)
+    s.on_result(enter, True, {}, now=10.0)
+    uav = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, *room.inner[:3], ual_state=C.UAL_FLYING_AUTO,
+                    water_level=2.0, last_seen=10.0)
+    facade_fire_floor_1 = FireView(12, 24.2, 8.2, 8.25, C.KIND_FACADE)
+    [cmd] = s.decide(WorldView(10.0, {"3": uav}, {12: facade_fire_floor_1}))
+    assert (cmd.task, cmd.target) == (C.SEARCH_INDOOR, (2, 0)), cmd   # before: leaving floor 2 for fire 12
+    s.on_result(cmd, True, {}, now=20.0)
+    uav.last_seen = 20.0
+    [cmd] = s.decide(WorldView(20.0, {"3": uav}, {12: facade_fire_floor_1}))
+    assert cmd.target != (2, 0), cmd                   # searched: now it leaves for the fire
