@@ -62,7 +62,7 @@ HOLD_HALF_SIZE = 1.0            # half side of the box held around a hovering UA
 # single-frequency GNSS (the trial penalised RTK) is off by about a metre horizontally (some 0.7 m per axis,
 # 1 sigma, wandering slowly); vertically the UAL's height (GNSS fused with a barometer) by about half a metre
 # between two robots nearby. The central unit's transit altitudes are 2 x (HOLD_HALF_SIZE + POSE_ERROR_MARGIN_Z)
-# + 0.5 m apart, so that UAVs crossing at their own altitudes do not wait for each other. A team on RTK: a few cm
+# + 2 x 0.5 m (the heights two UAVs hold) apart, so that UAVs crossing at their own altitudes do not wait for each other. A team on RTK: a few cm
 POSE_ERROR_MARGIN = 0.75
 POSE_ERROR_MARGIN_Z = 0.5
 POSITION_TOLERANCE = 0.2        # m, a go-to has arrived (the UAL stops within 0.1 m)

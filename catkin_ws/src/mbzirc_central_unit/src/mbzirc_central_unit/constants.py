@@ -71,10 +71,13 @@ LEG_BLOCKED_BACKOFF_MAX = 60.0
 MAX_BLOCKED_LEGS = 3
 # 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is probably out
 NOT_SEEN_HOT_LIMIT = 2
-# Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 3.5 m apart: the agents'
-# boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of the reported height,
-# mbzirc_agents pose_error_boxes.py), and 0.5 m more for the heights the UAVs hold (a take-off ends within
-# 0.3 m): UAVs crossing at their own altitudes, or hovering over neighbouring pads, need not wait for each other
-DEFAULT_ALTITUDES = {"1": 4.0, "2": 7.5, "3": 11.0}
+# Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 4 m apart: the agents'
+# boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of its reported height,
+# mbzirc_agents pose_error_boxes.py), and 0.5 m more on each UAV for the height it holds: a take-off goes its
+# height above the pad's reported height, off by the vertical GNSS bias (realistic seed 108: 3.5 m apart, UAV 1
+# held 4.5 and UAV 2 7.3 over their pads, their hold boxes overlapped, each one's go_to waited for the other's
+# hold for 360 s). UAVs crossing at their own altitudes, or hovering over neighbouring pads, need not wait for
+# each other. The highest (12 m, its box to 14 m) stays under the 20 m ceiling and goes around the tower.
+DEFAULT_ALTITUDES = {"1": 4.0, "2": 8.0, "3": 12.0}
 ALTITUDE_BASE = 4.0
-ALTITUDE_STEP = 3.5
+ALTITUDE_STEP = 4.0
