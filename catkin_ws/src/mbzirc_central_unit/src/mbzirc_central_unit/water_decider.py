@@ -11,7 +11,7 @@ from . import geometry as G
 from .command import Command
 from .decider import Decider
 from .indoor_phase import IndoorPhase
-from .transit import at, near_building, nearest
+from .transit import at, inside_tower, near_building, nearest
 from .world_model import AgentView, FireView, WorldView
 
 PLAUSIBLE_RADIUS = 2.0  # m from a holder of the layout for a facade / indoor fire track to be a target
@@ -69,6 +69,16 @@ class WaterDecider(Decider):
         entered = self._room_just_entered(a, world)
         if entered is not None:
             return (C.KIND_INDOOR, entered, None)
+        indoor = [f for f in self._confirmed(world.fires_of(C.KIND_INDOOR)) if f.floor in self.indoor.uav_floors(world)
+                  and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
+                  and self.indoor.room_to_reach(f.floor, f) is not None]
+        # 0b. a known indoor fire on the floor this UAV is inside, before any job elsewhere: it is seconds
+        #     away, out through the window and back in again later 60-100 s (realistic 201: a UAV that had
+        #     just found its floor's fire, full tank, left to top up a facade fire already out)
+        here = [f for f in indoor if inside_tower(a) and f.floor == G.floor_of(a.z)]
+        if here:
+            f = nearest(a, here)
+            return (C.KIND_INDOOR, f.floor, f)
         # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first); fires
         #    probably out (failure_rules.py) only when nothing else is left (4.)
         facade = self._confirmed(world.fires_of(C.KIND_FACADE))
@@ -79,9 +89,6 @@ class WaterDecider(Decider):
                 f = nearest(a, group)
                 return (C.KIND_FACADE, f.floor, f)
         # 2. an indoor fire already known on a floor I own or nobody owns.
-        indoor = [f for f in self._confirmed(world.fires_of(C.KIND_INDOOR)) if f.floor in self.indoor.uav_floors(world)
-                  and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
-                  and self.indoor.room_to_reach(f.floor, f) is not None]
         if indoor:
             f = nearest(a, indoor)
             return (C.KIND_INDOOR, f.floor, f)

@@ -511,3 +511,24 @@ def test_a_room_just_entered_is_searched_before_the_uav_leaves_for_other_work():
     uav.last_seen = 20.0
     [cmd] = s.decide(WorldView(20.0, {"3": uav}, {12: facade_fire_floor_1}))
     assert cmd.target != (2, 0), cmd                   # searched: now it leaves for the fire
+
+
+def test_a_uav_inside_a_floor_puts_out_the_indoor_fire_it_found_there_before_facade_work():
+    """Realistic seed 201 (738dab6): UAV 2, full tank, found in2_w in the room it searched on floor 2 and flew
+    out at once to top up facade fire D_4 on floor 1 (already out); in2_w got its first water 250 s later.
+    Rule: a known indoor fire on the floor the UAV is inside comes before any job elsewhere (it is seconds
+    away; out through the window and back in again costs 60-100 s)."""
+    s = Strategy(StrategyParams())
+    room = s.p.layout.rooms[2][0]
+    found = Command("2", C.SEARCH_INDOOR, {"floor": 2, "path": list(room.path)},
+                    "searching floor 2 indoors (room 0)", (2, 0))
+    s.on_sent(found)
+    s.on_result(found, True, {"fire_ids": [26]}, now=10.0)
+    s.book.pending_ids.clear()
+    uav = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *room.inner[:3], ual_state=C.UAL_FLYING_AUTO,
+                    water_level=2.0, last_seen=10.0)
+    holder = min(s.p.layout.indoor_holders, key=lambda h: math.dist(h[:3], room.inner[:3]))
+    fires = {15: FireView(15, 24.2, 8.2, 8.25, C.KIND_FACADE),              # floor 1's facade fire, to top up
+             26: FireView(26, *holder[:3], C.KIND_INDOOR)}                # the fire just found on floor 2
+    [cmd] = s.decide(WorldView(10.0, {"2": uav}, fires))
+    assert cmd.goal.get("fire_id") == 26 or cmd.target == ("view", 26), cmd   # before: leaving for fire 15
