@@ -712,8 +712,8 @@ class RobotAgent(Agent):
             return 'not hovering with a trusted pose'
         with self._regions_lock:
             waiting, held = self._waiting_for, dict(self.held)
-        if waiting is None or waiting == 'hold':
-            return 'not waiting for a region'
+        if waiting == 'hold' or (waiting is None and self.running_task()):
+            return 'busy, not waiting for a region'          # (it frees its boxes when its work ends)
         in_the_way = sorted(l for l, b in held.items() if boxes_overlap(b, box))
         if in_the_way != ['hold']:
             return f'our boxes in the way: {in_the_way or "none"}'
@@ -814,8 +814,12 @@ class RobotAgent(Agent):
         return float(p[0]), float(p[1])
 
     def idle(self) -> None:
-        """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one."""
-        if self.ROBOT_TYPE != 'uav' or not self.p.use_regions or self.parked:
+        """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one; while idle
+        and hovering, step aside when the region manager asked (a robot waits long for our hold)."""
+        if self.ROBOT_TYPE != 'uav' or not self.p.use_regions:
+            return
+        self._idle_step_aside()
+        if self.parked:
             return
         if self.ual_state not in (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED) or self.pose is None:
             return
@@ -828,6 +832,19 @@ class RobotAgent(Agent):
         # up to parked_height above the ground it stands on, not above its reported (GNSS) height
         box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, self.arena[2] + self.p.parked_height))
         self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
+
+    def _idle_step_aside(self) -> None:
+        """The step out of a waiting robot's box that the region manager asked of this idle UAV (no task
+        waits in reserve() to take it: the idle loop does). Why: the manager's cycle rule never fires when
+        the holder waits for nothing, and a UAV hovering with no work would block the other for good."""
+        with self._regions_lock:
+            order, self._yield_order = self._yield_order, None
+        if order is None or self.ual_state != C.UAL_FLYING_AUTO:
+            return
+        try:
+            self._step_aside(IdleStep(self), *order)
+        except Exception as e:          # TaskError (not there, no hold granted), a crash: logged, idle again
+            self.backend.logwarn(f'stepping aside while idle failed: {e}')
 
     def _on_cost(self, req: Any) -> GetCostToGoToResponse:
         """get_cost_to_go_to: metres to travel (-1 when the waypoint is invalid or unreachable)."""
@@ -843,3 +860,17 @@ class RobotAgent(Agent):
     def cost_to_go_to(self, target: Sequence[float]) -> float:
         """Straight-line distance (UAV); the UGV plans around the building."""
         return float(np.linalg.norm(np.asarray(target) - self.position(wait=0.0)[:3]))
+
+
+class IdleStep:
+    """The task stand-in of a step aside taken by the idle loop: nothing to preempt (a goal that arrives
+    meanwhile starts once the short step is done), its feedback only logged."""
+
+    def __init__(self, agent: 'RobotAgent') -> None:
+        self.agent = agent
+
+    def check_preempt(self) -> None:
+        """Never preempted."""
+
+    def feedback(self, state: str, text: str) -> None:
+        self.agent.backend.loginfo_throttle(2.0, f'[idle] {state}: {text}')

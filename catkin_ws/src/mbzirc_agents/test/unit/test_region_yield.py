@@ -5,7 +5,7 @@ waited the whole trial for a go_to box that overlapped the other's hold box.
 """
 import numpy as np
 import pytest
-from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
+from mbzirc_comm_objs.msg import GoToGoal, HoverGoal, TakeOffGoal
 from mbzirc_comm_objs.srv import AskForRegionRequest
 
 from fake_backend import FakeBackend
@@ -102,17 +102,45 @@ def test_every_step_taken_by_others_the_uav_stays_and_waits_on(two_uavs):
     assert any('cannot step out of 3/go_to' in w for w in be.warns)
 
 
-def test_a_uav_not_waiting_for_a_region_declines_to_step_aside(two_uavs):
+def test_a_uav_busy_but_not_waiting_for_a_region_declines_to_step_aside(two_uavs):
     agent, ual, be, rm = two_uavs
     s = be.servers['take_off_action']
     s.send(TakeOffGoal(height=6.0))
     assert s.wait(20) == 'succeeded'
+    hover = be.servers['hover_action']
+    hover.send(HoverGoal(duration=0.0))                        # working where it is (a task, no region wait)
+    be.clock.sleep(1.0)
     req = AskForRegionRequest(agent_id='3', label='go_to')
     (req.min_corner.point.x, req.min_corner.point.y, req.min_corner.point.z) = UAV3_GO_TO[0]
     (req.max_corner.point.x, req.max_corner.point.y, req.max_corner.point.z) = UAV3_GO_TO[1]
-    assert not be.services['yield_region'](req).success       # hovering, no task waiting: it may move any time
+    assert not be.services['yield_region'](req).success       # it frees its boxes when its work ends
     req.min_corner.point.x = float('nan')
     assert not be.services['yield_region'](req).success
+
+
+def test_an_idle_hovering_uav_steps_out_of_the_box_a_robot_waits_long_for(two_uavs):
+    """No cycle: UAV 2 hovers with no work over UAV 3's way, UAV 3 waits. The manager's idle-holder rule
+    asks UAV 2 after ~idle_yield_after; the idle UAV steps aside by itself and UAV 3's box is granted."""
+    agent, ual, be, rm = two_uavs
+    s = be.servers['take_off_action']
+    s.send(TakeOffGoal(height=6.0))
+    assert s.wait(20) == 'succeeded'
+    assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
+    orders, granted_at = [], None
+    for _ in range(120):
+        if rm.ask('3', 'go_to', *UAV3_GO_TO)[0]:
+            granted_at = be.clock.now()
+            break
+        got = manager_step(be, rm)
+        if got:
+            orders.append(got)
+        be.clock.sleep(0.5)
+    assert granted_at is not None, f'UAV 3 waited for ever (orders: {orders}, warnings: {be.warns[-3:]})'
+    assert [(o.victim, o.winner, ok) for o, ok in orders] == [('2', '3', True)]
+    assert orders[0][0].idle_for >= 15.0
+    regions = rm.regions()
+    assert not boxes_overlap(regions[('2', 'hold')], regions[('3', 'go_to')]) and ('2', 'step_aside') not in regions
+    assert ual.pos[2] < 5.2 and np.hypot(ual.pos[0], ual.pos[1]) < 0.3
 
 
 def test_step_targets_shortest_first_inside_the_arena_and_never_near_a_wall():

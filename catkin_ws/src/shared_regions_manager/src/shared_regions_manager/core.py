@@ -35,6 +35,10 @@ Rules added because the table is shared by every robot and trusted by all of the
   (realistic seed 108: UAV 2 accepted 18 orders in 360 s, none carried out, UAV 1 was never asked).
   The turns are forgotten `3 x yield_retry_s` after a pair's last order: a new cycle starts from the
   priority again.
+- **A long wait for an idle holder** (no cycle): a robot refused for `idle_yield_after_s` by boxes of a
+  robot that waits for nothing asks that robot to leave (deadlock.idle_holder_order; same retry rule). Why:
+  the cycle rule never fires when the holder does not wait (a UAV hovering with no work over another's
+  way); an idle UAV may step aside, a working one declines.
 """
 from __future__ import annotations
 
@@ -48,7 +52,7 @@ import numpy as np
 
 from mbzirc_arena.boxes import Box, boxes_overlap, make_box
 
-from .deadlock import Wait, YieldOrder, find_cycle, ranked_priority, yield_candidates
+from .deadlock import Wait, YieldOrder, find_cycle, idle_holder_order, ranked_priority, yield_candidates
 
 ROBOT_NS = '/mbzirc2020_{}'
 
@@ -84,6 +88,7 @@ class RegionManager:
         waiting_fresh_s: a refused request not asked again for this long no longer waits (agents retry
             at 2 Hz).
         yield_retry_s: an order is not repeated (nor another robot of its cycle named) for this long.
+        idle_yield_after_s: a robot refused this long by a robot that waits for nothing asks it to leave.
         wait_clock: seconds for the waits (default: clock; the node gives ROS time, as the agents retry
             in ROS time).
     """
@@ -92,7 +97,7 @@ class RegionManager:
                  unknown_lease_s: float = 10.0, max_labels_per_agent: int = 16, max_agents: int = 32,
                  clock: Callable[[], float] = time.monotonic, priority: Optional[Iterable[str]] = None,
                  deadlock_after_s: float = 2.0, waiting_fresh_s: float = 2.0, yield_retry_s: float = 20.0,
-                 wait_clock: Optional[Callable[[], float]] = None) -> None:
+                 wait_clock: Optional[Callable[[], float]] = None, idle_yield_after_s: float = 15.0) -> None:
         self._regions: Dict[Tuple[str, str], Reservation] = {}
         self._lock = threading.Lock()
         self.known = None if known_agents is None else {str(a) for a in known_agents}
@@ -106,6 +111,7 @@ class RegionManager:
         self.deadlock_after_s = float(deadlock_after_s)
         self.waiting_fresh_s = float(waiting_fresh_s)
         self.yield_retry_s = float(yield_retry_s)
+        self.idle_yield_after_s = float(idle_yield_after_s)
         self.wait_clock = wait_clock or clock
         self._refused: Dict[Tuple[str, str], Refused] = {}
         self._orders: Dict[Tuple[str, str], Tuple[float, bool]] = {}   # (victim, winner) -> (time, declined)
@@ -182,6 +188,7 @@ class RegionManager:
         now = self.wait_clock()
         with self._lock:
             waits: Dict[str, Wait] = {}
+            waited: Dict[str, float] = {}
             latest_first = sorted(self._refused.items(), key=lambda kv: (kv[0][0], -kv[1].last, kv[0][1]))
             for (agent, label), r in latest_first:           # an agent waits for its latest request
                 if now - r.last > self.waiting_fresh_s or now - r.since < self.deadlock_after_s or agent in waits:
@@ -189,10 +196,12 @@ class RegionManager:
                 blockers = tuple(sorted(k for k, res in self._regions.items()
                                         if k[0] != agent and boxes_overlap(r.box, res.box)))
                 waits[agent] = Wait(agent, label, (r.box[0].copy(), r.box[1].copy()), blockers)
+                waited[agent] = now - r.since
             self._refused = {k: r for k, r in self._refused.items() if now - r.last <= self.waiting_fresh_s}
             cycle = find_cycle(waits)
             if cycle is None:
-                return None
+                orders = [o for o in idle_holder_order(waits, waited, self.idle_yield_after_s) if self.is_known(o.victim)]
+                return self._issue(orders, now)
             self._turns = {pair: v for pair, v in self._turns.items() if now - v[1] < 3.0 * self.yield_retry_s}
             orders = sorted(yield_candidates(cycle, self.priority),     # stable: priority among equals
                             key=lambda o: self._turns.get((o.victim, o.winner), (0, now))[0])
@@ -201,13 +210,18 @@ class RegionManager:
             if any(not declined for (victim, winner), (_, declined) in recent.items()
                    if any(o.victim == victim and o.winner == winner for o in orders)):
                 return None                   # a robot of this cycle is stepping aside: give it time
-            for order in orders:
-                pair = (order.victim, order.winner)
-                if pair not in recent:
-                    self._orders[pair] = (now, False)
-                    self._turns[pair] = (self._turns.get(pair, (0, now))[0] + 1, now)
-                    return order
-            return None
+            return self._issue(orders, now)
+
+    def _issue(self, orders: List[YieldOrder], now: float) -> Optional[YieldOrder]:
+        """The first of orders not given within yield_retry_s, recorded as given (call with the lock held)."""
+        self._orders = {pair: v for pair, v in self._orders.items() if now - v[0] < self.yield_retry_s}
+        for order in orders:
+            pair = (order.victim, order.winner)
+            if pair not in self._orders:
+                self._orders[pair] = (now, False)
+                self._turns[pair] = (self._turns.get(pair, (0, now))[0] + 1, now)
+                return order
+        return None
 
     def yield_answer(self, order: YieldOrder, accepted: bool) -> None:
         """The victim's answer: a declined order lets the next robot of the cycle be named."""

@@ -17,6 +17,10 @@ Rules:
   predecessor in the cycle), the winner. When it cannot (it declines: not hovering, in a passage, no free
   place), the next-lowest is asked, and so on. When the cycle still stands after an order (accepted but
   not carried out), the robot of it named fewer times yet comes first (core.py: the robots take turns).
+- No cycle, but a robot has waited `idle_yield_after` for boxes of a robot that waits for nothing (it
+  hovers idle, or works where it is): that holder is asked to leave the box (`idle_holder_order`); it
+  accepts only when idle (mbzirc_agents README), else it declines and the wait goes on (a working robot
+  frees its boxes when its work ends).
 """
 from __future__ import annotations
 
@@ -44,9 +48,14 @@ class YieldOrder:
     box: Box
     victim_labels: Tuple[str, ...]            # the victim's boxes that overlap it
     cycle: Tuple[Wait, ...]
+    idle_for: float = 0.0                     # > 0: no cycle; the winner waited this long for a victim that waits for nothing
 
     def describe(self) -> str:
-        """The cycle and the order in words (the manager's log line)."""
+        """The cycle (or the long wait for an idle holder) and the order in words (the manager's log line)."""
+        if self.idle_for > 0.0:
+            return (f'{self.winner}/{self.winner_label} {fmt_box(self.box)} has waited {self.idle_for:.0f} s for '
+                    f'{"/".join(f"{self.victim}/{l}" for l in self.victim_labels)}, and {self.victim} waits for '
+                    f'nothing: {self.victim} is asked to move out of it')
         waits = ', '.join(f'{w.agent}/{w.label} {fmt_box(w.box)} waits for '
                           + ' and '.join(f'{o}/{l}' for o, l in w.blockers) for w in self.cycle)
         return (f'deadlock: {waits}; {self.victim} (lowest priority) is asked to move its '
@@ -93,3 +102,17 @@ def ranked_priority(priority: Iterable[str], known: Optional[Iterable[str]]) -> 
     """The priority list as strings (the known agents in their order when none is given)."""
     given = [str(a) for a in priority or []]
     return given if given else [str(a) for a in known or []]
+
+
+def idle_holder_order(waits: Dict[str, Wait], waited: Dict[str, float], after: float) -> List[YieldOrder]:
+    """Orders to holders that wait for nothing, of robots that waited at least `after` s for their boxes
+    (`waited`: seconds each waiting agent has waited for its request), the longest wait first."""
+    orders = []
+    for agent in sorted(waits, key=lambda a: (-waited.get(a, 0.0), a)):
+        w, t = waits[agent], waited.get(agent, 0.0)
+        if t < after:
+            continue
+        for owner in sorted({o for o, _ in w.blockers if o not in waits and o != agent}):
+            labels = tuple(sorted(l for o, l in w.blockers if o == owner))
+            orders.append(YieldOrder(owner, agent, w.label, w.box, labels, (w,), idle_for=t))
+    return orders

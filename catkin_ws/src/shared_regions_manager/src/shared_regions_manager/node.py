@@ -10,7 +10,9 @@ text is `table <n>`, the number of the table shown, saved under that number; tab
 Deadlocks (core.py, deadlock.py): `~priority` (default `~robot_ids`: highest first; the lowest of a
 wait-for cycle steps aside), `~deadlock_after` (2 s ROS time a cycle stands before the order),
 `~yield_retry` (20 s ROS time before an order is repeated), `~yield_service` ('/mbzirc2020_{}/yield_region':
-the victim's AskForRegion service, called with the winner's agent id, label and refused box: "leave it").
+the victim's AskForRegion service, called with the winner's agent id, label and refused box: "leave it"),
+`~idle_yield_after` (15 s ROS time a robot waits for boxes of a robot that waits for nothing before that
+one is asked to leave).
 """
 from __future__ import annotations
 
@@ -53,6 +55,7 @@ class RegionManagerNode:
             priority=[str(a) for a in rospy.get_param('~priority', [])],
             deadlock_after_s=float(rospy.get_param('~deadlock_after', 2.0)),
             yield_retry_s=float(rospy.get_param('~yield_retry', 20.0)),
+            idle_yield_after_s=float(rospy.get_param('~idle_yield_after', 15.0)),
             wait_clock=rospy.get_time)
         self.yield_service = str(rospy.get_param('~yield_service', '/mbzirc2020_{}/yield_region'))
         self.state_file = str(rospy.get_param('~state_file', '') or '')

@@ -277,3 +277,25 @@ def test_an_order_accepted_but_not_carried_out_names_the_other_agent_next():
     clock.t += 200.0
     seed_104_cycle(rm2, clock)
     assert rm2.deadlock().victim == '3'
+
+
+def test_a_long_wait_for_a_robot_that_waits_for_nothing_asks_that_robot_to_leave():
+    """No cycle: UAV 2 hovers with no work (holds its hold box, asks for nothing) on UAV 1's way. After
+    idle_yield_after of UAV 1's wait, UAV 2 is asked to leave UAV 1's box; not before, not an unknown agent,
+    and not again within yield_retry."""
+    clock = FakeClock()
+    rm = RegionManager(known_agents=['1', '2'], clock=clock, idle_yield_after_s=15.0, yield_retry_s=20.0)
+    assert rm.ask('2', 'hold', (-1, -1, 5.8), (1, 1, 8.8))[0]
+    assert rm.ask('ghost', 'hold', (-8, 2, 3), (-6, 4, 5))[0]
+    went = []
+    for _ in range(40):                                    # 20 s of UAV 1 asking at 2 Hz
+        assert not rm.ask('1', 'go_to', (-11.5, 0.6, 2.5), (-0.3, 9.6, 5.9))[0]
+        order = rm.deadlock()
+        if order is not None:
+            went.append((clock.t - 100.0, order))
+        clock.t += 0.5
+    assert len(went) == 1, [(t, o.describe()) for t, o in went]
+    t, order = went[0]
+    assert 15.0 <= t <= 16.0
+    assert (order.victim, order.winner, order.winner_label, order.victim_labels) == ('2', '1', 'go_to', ('hold',))
+    assert 'waits for nothing' in order.describe() and '2/hold' in order.describe()
