@@ -6,7 +6,10 @@ Reads a run dir of tools/run_mission.sh (summary.json, estimator_tracks.json, ro
 nothing. The central unit logs each goal (`<id> <- <task> (<why>)`) and each outcome (`<id> <task> -> STATE
 ...`); the region manager logs `<id>/<region> refused: ...` and `... granted after waiting`.
     python bench/mission_timeline.py RUN_DIR [RUN_DIR ...] [--goals] [--until T]
-Times are counted up to the time all fires were out (else the end of the run), or --until.
+    python bench/mission_timeline.py RUN_DIR [RUN_DIR ...] --share 2,3     (the water UAVs over all runs)
+Times are counted up to the time all fires were out (else the end of the run), or --until. The purposes
+and idle add up to that time; the columns in parentheses (region waits, failed goals, goals on fires already
+out) are parts of them, counted again.
 Not a benchmark (no figures of the code's speed): an analysis of one run's log, to find the waste.
 """
 from __future__ import annotations
@@ -194,12 +197,33 @@ def report(run_dir: str, show_goals: bool, until: Optional[float]) -> None:
                   f"{fire:6} {g.why[:60]} | {g.message[:60]}")
 
 
+def shares(run_dirs: list[str], agents: set[str]) -> None:
+    """Share of the given robots' time (each counted up to its run's end) per purpose, over all runs."""
+    total: dict[str, float] = defaultdict(float)
+    span = 0.0
+    for d in run_dirs:
+        run = load(d)
+        end = run.summary.get("all_out_time_s") or run.summary.get("sim_time_s") or 0.0
+        for agent, row in breakdown(run, end).items():
+            if agent in agents:
+                span += end
+                for k, v in row.items():
+                    total[k] += v
+    print(f"robots {sorted(agents)} over {len(run_dirs)} runs ({span:.0f} robot-s): " + ", ".join(
+        f"{k} {100 * v / span:.0f} %" for k, v in sorted(total.items(), key=lambda kv: -kv[1])))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="+", help="run dirs (tools/run_mission.sh OUT=...)")
     ap.add_argument("--goals", action="store_true", help="list every goal with its purpose and outcome")
     ap.add_argument("--until", type=float, help="count up to this sim time (default: all out, else the end)")
+    ap.add_argument("--share", metavar="IDS", help="only the share of time per purpose of these robots over "
+                    "all the runs, e.g. 2,3 (the water UAVs)")
     args = ap.parse_args()
+    if args.share:
+        shares(args.runs, set(args.share.split(",")))
+        return
     for r in args.runs:
         report(r, args.goals, args.until)
 
