@@ -870,7 +870,8 @@ class IdleStep:
         self.agent = agent
 
     def check_preempt(self) -> None:
-        """Never preempted."""
+        """Never preempted; the state machine's loop still shows it runs (the agent's liveness)."""
+        self.agent.note_sm_alive()
 
     def feedback(self, state: str, text: str) -> None:
         self.agent.backend.loginfo_throttle(2.0, f'[idle] {state}: {text}')
