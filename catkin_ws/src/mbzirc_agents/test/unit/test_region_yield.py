@@ -45,6 +45,20 @@ def manager_step(be, rm):
     return order, accepted
 
 
+def wait_for_region(be, rm, agent_id, box, seconds=60.0):
+    """The scripted robot asks for its go_to box at 2 Hz while the manager runs at 2 Hz: (ROS time it was
+    granted or None, the manager's (order, accepted) meanwhile)."""
+    orders = []
+    for _ in range(int(seconds * 2)):
+        if rm.ask(agent_id, 'go_to', *box)[0]:
+            return be.clock.now(), orders
+        got = manager_step(be, rm)
+        if got:
+            orders.append(got)
+        be.clock.sleep(0.5)
+    return None, orders
+
+
 def test_two_uavs_each_waiting_for_the_others_hold_box_no_longer_wait_forever(two_uavs):
     agent, ual, be, rm = two_uavs
     s = be.servers['take_off_action']
@@ -53,15 +67,7 @@ def test_two_uavs_each_waiting_for_the_others_hold_box_no_longer_wait_forever(tw
     assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
     go = be.servers['go_to_action']
     go.send(GoToGoal(waypoint=goal_pose(0.0, 8.0, 6.0, 0.0)))          # northwards across UAV 3's hold
-    orders, granted_at = [], None
-    for _ in range(120):                                      # 60 s: UAV 3 retries at 2 Hz, the manager at 2 Hz
-        if rm.ask('3', 'go_to', *UAV3_GO_TO)[0]:
-            granted_at = be.clock.now()
-            break
-        got = manager_step(be, rm)
-        if got:
-            orders.append(got)
-        be.clock.sleep(0.5)
+    granted_at, orders = wait_for_region(be, rm, '3', UAV3_GO_TO)
     assert granted_at is not None, f'UAV 3 waited for ever (orders: {orders})'
     assert [(o.victim, o.winner, ok) for o, ok in orders] == [('2', '3', True)]
     # UAV 2 left UAV 3's box for a place of its own, by the shortest step (down, out of the box's floor)
@@ -126,15 +132,7 @@ def test_an_idle_hovering_uav_steps_out_of_the_box_a_robot_waits_long_for(two_ua
     s.send(TakeOffGoal(height=6.0))
     assert s.wait(20) == 'succeeded'
     assert rm.ask('3', 'hold', *UAV3_HOLD)[0]
-    orders, granted_at = [], None
-    for _ in range(120):
-        if rm.ask('3', 'go_to', *UAV3_GO_TO)[0]:
-            granted_at = be.clock.now()
-            break
-        got = manager_step(be, rm)
-        if got:
-            orders.append(got)
-        be.clock.sleep(0.5)
+    granted_at, orders = wait_for_region(be, rm, '3', UAV3_GO_TO)
     assert granted_at is not None, f'UAV 3 waited for ever (orders: {orders}, warnings: {be.warns[-3:]})'
     assert [(o.victim, o.winner, ok) for o, ok in orders] == [('2', '3', True)]
     assert orders[0][0].idle_for >= 15.0
@@ -190,15 +188,7 @@ def test_seed_108_uav_over_its_pad_steps_out_of_the_neighbours_box_by_its_held_h
     assert rm.ask('1', 'hold', *UAV1_HOLD_108)[0]              # side by side: the holds only touch
     go = be.servers['go_to_action']
     go.send(GoToGoal(waypoint=goal_pose(30.0, 0.0, 7.5, 0.0)))  # eastwards: its box overlaps UAV 1's hold
-    orders, granted_at = [], None
-    for _ in range(120):
-        if rm.ask('1', 'go_to', *UAV1_GO_TO_108)[0]:
-            granted_at = be.clock.now()
-            break
-        got = manager_step(be, rm)
-        if got:
-            orders.append(got)
-        be.clock.sleep(0.5)
+    granted_at, orders = wait_for_region(be, rm, '1', UAV1_GO_TO_108)
     assert granted_at is not None, f'UAV 1 waited for ever (orders: {[(o.victim, ok) for o, ok in orders]}, ' \
                                    f'warnings: {be.warns[-3:]})'
     regions = rm.regions()
