@@ -19,17 +19,22 @@ UAV3_HOLD = ((-1.0, 2.3, 6.4), (1.0, 4.3, 8.4))
 UAV3_GO_TO = ((-1.0, -5.0, 6.4), (1.0, 4.3, 8.4))         # southwards across UAV 2's hold
 
 
-@pytest.fixture
-def two_uavs():
-    """UAV 2 (the agent under test) at its pad; the manager's table shared with a scripted UAV 3. UAV 2 has
-    the lower priority here, so that it is the one named to step aside."""
+def uav_2_and_a_scripted_uav(other):
+    """UAV 2 (the agent under test) at its pad; the manager's table shared with a scripted UAV `other`. UAV 2
+    has the lower priority, so that it is the one named to step aside."""
     be = FakeBackend()
-    rm = RegionManager(known_agents=['2', '3'], priority=['3', '2'], clock=be.clock.now)
+    rm = RegionManager(known_agents=[other, '2'], priority=[other, '2'], clock=be.clock.now)
     ual = FakeUal(be, speedup=8.0, regions=rm)
     from mbzirc_agents.uav_agent import UavAgent
     agent = start_agent(UavAgent('2', be, {'region_timeout': 60.0}), be)
     yield agent, ual, be, rm
     stop_agent(agent, ual, be)
+
+
+@pytest.fixture
+def two_uavs():
+    """UAV 2 and a scripted UAV 3."""
+    yield from uav_2_and_a_scripted_uav('3')
 
 
 def manager_step(be, rm):
@@ -170,14 +175,8 @@ UAV1_GO_TO_108 = ((-11.5, 0.6, 2.5), (-0.3, 9.6, 5.9))
 
 @pytest.fixture
 def seed_108():
-    """UAV 2 (the agent under test, lower priority) at its pad; UAV 1 scripted."""
-    be = FakeBackend()
-    rm = RegionManager(known_agents=['1', '2'], priority=['1', '2'], clock=be.clock.now)
-    ual = FakeUal(be, speedup=8.0, regions=rm)
-    from mbzirc_agents.uav_agent import UavAgent
-    agent = start_agent(UavAgent('2', be, {'region_timeout': 60.0}), be)
-    yield agent, ual, be, rm
-    stop_agent(agent, ual, be)
+    """UAV 2 and a scripted UAV 1."""
+    yield from uav_2_and_a_scripted_uav('1')
 
 
 def test_seed_108_uav_over_its_pad_steps_out_of_the_neighbours_box_by_its_held_hold_box(seed_108):
