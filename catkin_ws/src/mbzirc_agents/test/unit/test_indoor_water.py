@@ -69,14 +69,21 @@ def scenes():
         s.close()
 
 
-def test_water_flows_until_the_fire_reads_cold_several_times(scenes):
+def test_water_flows_until_the_fire_is_soaked_then_it_is_confirmed_cold_with_the_pump_off(scenes):
     sc = scenes(hot_until=1.0)
+    stops = []
+    stop = sc.be.handlers['actuators_system/stop_pump']
+    sc.be.handlers['actuators_system/stop_pump'] = lambda r: stops.append(sc.be.clock.now()) or stop(r)
     s = sc.extinguish()
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert sc.statuses == [C.STATUS_EXTINGUISHED]
-    # hot 1 s of pumping, then C.COLD_CHECKS cold answers 0.5 s apart, water flowing
+    # hot 1 s of pumping, then a soak of at least ~soak_min_time (1 s) with water flowing
     used = 2.0 - sc.ual.water
-    assert used >= 0.4 * (1.0 + 0.5 * (C.COLD_CHECKS - 1)) * 0.8, f'only {used:.2f} L pumped'
+    assert used >= 0.4 * 2.0 * 0.8, f'only {used:.2f} L pumped'
+    # then C.COLD_CHECKS cold answers (0.5 s apart) with the pump off: no water for them
+    assert len(stops) >= 2, 'the pump was not stopped before the cold answers'
+    assert stops[-1] - stops[0] >= 0.5 * (C.COLD_CHECKS - 1), f'confirmed in {stops[-1] - stops[0]:.1f} s'
+    assert used <= 0.4 * 3.5, f'{used:.2f} L pumped: water flowed while the cold answers were counted'
 
 
 def test_the_raw_thermal_image_is_subscribed_only_while_the_task_runs(scenes):
@@ -536,6 +543,51 @@ def test_a_fire_fading_out_of_the_detectors_sight_is_watered_until_it_reads_at_i
     s = sc.extinguish(timeout=60)
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
+
+
+@pytest.mark.parametrize('need, wall, gradient, offset, noise', [
+    (0.8, 31.0, 0.0, 0.0, 0.5),
+    (1.0, 45.0, 12.0, 3.0, 0.8),       # a sun-heated wall with a slope, the camera reading 3 degC high
+    (1.3, 31.0, 0.0, -2.0, 1.0),
+    (1.3, 55.0, 20.0, 0.0, 0.5)])
+def test_a_full_tank_puts_out_a_fire_needing_up_to_1_3_nominal_and_confirms_it_without_running_dry(
+        scenes, need, wall, gradient, offset, noise):
+    """Water economy (a 2 L tank, a fire needing 0.8-1.3 L: the arena's spread around its 1 L nominal): soaked,
+    then judged out on cold answers with the pump off, with water left. Before, the cold answers were counted
+    with water flowing (6 answers: ~1.2 L at this fake pump's 0.4 L/s, ~1.6 L in missions): the tank ran dry
+    on a fire already out ('the tank ran dry before 6 cold answers'), which stayed active for a top-up trip."""
+    sc = scenes(hot_until=1.0)
+    fire = FadingFire(sc, need=need, start_water=2.0, heat=50.0, wall=wall, gradient=gradient, offset=offset,
+                      noise=noise)
+    s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+    assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
+    assert sc.ual.water > 0.05, f'{sc.ual.water:.2f} L left: the tank ran dry on it'
+
+
+class JetCooledFire(FadingFire):
+    """A fire whose surface the jet cools: under water it reads `hidden` of its untouched heat colder than it
+    is (at its wall's level well before it is out); once the water stops it shows the heat it still has."""
+
+    def __init__(self, sc, hidden, **kw):
+        self.hidden = hidden
+        super().__init__(sc, **kw)
+
+    def contrast(self):
+        left = self.heat * max(0.0, 1.0 - self.progress())
+        return max(0.0, left - self.hidden * self.heat) if self.sc.ual.pump else left
+
+
+def test_a_fire_that_reads_cold_only_under_the_jet_is_watered_again_when_it_shows_hot_without_it(scenes):
+    """Confirmed with the pump off, a fire still burning shows its heat again (firefighters watch for it
+    once the water stops) and gets water until it is out. Before, the cold answers were counted under the
+    jet: this fire (a third of its heat hidden by the water) was judged out at ~97 % of its water."""
+    sc = scenes(hot_until=1.0)
+    fire = JetCooledFire(sc, hidden=0.3, need=8.0, start_water=12.0, heat=50.0)
+    s = sc.extinguish(timeout=90)
+    assert fire.progress() >= 1.0 or not s.result.extinguished, \
+        f'judged out at {fire.progress():.3f} of its water: {s.result.message}'
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
 
 
 def test_with_a_cold_threshold_at_the_detectors_contrast_the_same_fire_is_judged_out_too_early(scenes):

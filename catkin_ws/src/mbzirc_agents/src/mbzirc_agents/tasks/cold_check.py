@@ -7,7 +7,9 @@ at the wall beside the fire (mission seed 3: a fire at 63 % was reported out by 
 hot from its watering pose), the pump runs dry or fails, and a nearly quenched heater falls under the
 detection threshold while it still needs water. The tasks say whether water flowed at the fire
 (`watered`: the pump on, the tank level dropping (`WaterFlow`), the robot still where it saw it hot);
-this module judges.
+this module judges. Indoors (tasks/indoor.py) the answers that count come after a soak with the pump off
+(a fire still burning shows again without water, and the count then costs no water): `watered` there
+means the robot still looks from where it watered.
 """
 from __future__ import annotations
 
@@ -41,6 +43,10 @@ class ColdConfirmation:
             self.cold_in_row = self.cold_in_row + 1 if watered else 0
         # None (detector silent): no evidence either way, the count stays
         return self.out
+
+    def restart(self) -> None:
+        """The row of cold answers starts again (the conditions of the answers that count changed)."""
+        self.cold_in_row = 0
 
     @property
     def out(self) -> bool:

@@ -204,10 +204,11 @@ class ExtinguishIndoorFire(AgentTask):
     GNSS height, whose error (0.3-0.5 m, wandering) puts a jet of a few cm beside a 0.15 m hole (realistic
     seed 108: 2 L shot at each floor-1/2 fire, the fires left at 13-91 %).
 
-    When it is out (tasks/cold_check.py): seen hot from the watering pose, then cold C.COLD_CHECKS times in a
-    row with water flowing at it (the tank level dropping) from that pose, cold judged on the raw thermal image
+    When it is out (tasks/cold_check.py): seen hot from the watering pose, watered until it reads cold and
+    soaked (~soak_fraction) with water flowing at it (the tank level dropping), then, the pump off, cold
+    C.COLD_CHECKS times in a row from that pose, cold judged on the raw thermal image
     (tasks/thermal_contrast.py: the locked fire no more than ~out_contrast above its wall, not the detector's
-    silence) and soaked (~soak_fraction) before, the jet's height on the hot spot as last seen (a UAV whose
+    silence), the jet's height on the hot spot as last seen (a UAV whose
     last sighting put the fire beyond the height it could reach waters on, but a cold answer then says "out
     of view", not "out"). A fire never seen hot from there is never reported out: the goal fails with why,
     and the central unit tries again or gives it to another robot."""
@@ -415,8 +416,14 @@ class ExtinguishIndoorFire(AgentTask):
         verdict "out" cannot be given without seeing it (seen: a top-up from a pose that did not look at
         the fire marked a fire at 63 % out): the goal fails, the fire stays active.
 
-        Cold answers count only with water flowing (the tank level dropping) and the robot still at the
-        watering pose. The heading stays on the hot spot the thermal camera sees (`_keep_aim`); turned off
+        Until the soak is over, cold answers count only with water flowing (the tank level dropping) and the
+        robot still at the watering pose. After it the pump is off and C.COLD_CHECKS cold answers in a row
+        from the watering pose (the jet's aim on the fire) say "out"; a hot one starts the pump again (a new
+        soak follows its next cold answer). Why the pump off: a fire that still burns shows its heat again
+        once the water stops (under the jet its surface may read cold), and counting under the jet cost
+        ~1.6 L of a 2 L tank in missions (6 answers, 0.2 L/s, answers ~1.3 sim-s apart at 8x): a fire
+        needing more than its nominal litre ran the tank dry after it was out and stayed active for a
+        top-up trip. The count costs time only (~3 s), so it stays at C.COLD_CHECKS. The heading stays on the hot spot the thermal camera sees (`_keep_aim`); turned off
         it, the robot turns back where it stands. It is never driven back to the pose's GNSS position: a
         robot holds its own set-point, and a drive to a GNSS position moves it by the drift of the GNSS
         error since (realistic seed 103: the UGV moved 0.37 m and its jet hit 0.5 m beside the hole).
@@ -440,9 +447,10 @@ class ExtinguishIndoorFire(AgentTask):
         self.raw_turn_time = -math.inf
         try:
             a.start_pump()
+            pumping = True
             start = a.backend.now()
             flow = WaterFlow(start)
-            while not a.water_empty():
+            while not pumping or not a.water_empty():      # the pump-off confirmation needs no water
                 self.check_preempt()
                 now = a.backend.now()
                 if now - start > a.p.extinguish_timeout:
@@ -450,10 +458,13 @@ class ExtinguishIndoorFire(AgentTask):
                 if not cold.seen_hot and now - start >= a.p.top_up_time:
                     raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: {now - start:.0f} s of top-up water on '
                                     'its confirmed track, left active')
-                stalled = flow.stalled(now, fire_id)
+                stalled = flow.stalled(now, fire_id) if pumping else None
                 if stalled:
                     raise TaskError(stalled)
-                if soak.soaking:
+                if not pumping:
+                    self.feedback('CONFIRMING', f'fire {fire_id} soaked: pump off, watching it stay cold '
+                                                f'({cold.cold_in_row}/{cold.checks}), water {a.water_level:.2f} L')
+                elif soak.soaking:
                     self.feedback('SOAKING', f'fire {fire_id} reads cold: soaking it, aim frozen, water '
                                              f'{a.water_level:.2f} L')
                 elif cold.seen_hot:
@@ -476,7 +487,8 @@ class ExtinguishIndoorFire(AgentTask):
                 backed = self._keep_off_walls(pose[3])           # last: its set-point is the one held
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
-                watered = flow.update(a.water_level, a.backend.now()) and at_pose and self.on_jet
+                looking = at_pose and self.on_jet                # where it saw the fire hot, the jet on it
+                watered = (flow.update(a.water_level, a.backend.now()) or not pumping) and looking
                 if first_level is None and math.isfinite(a.water_level):
                     first_level = a.water_level
                 pumped = 0.0 if first_level is None or not math.isfinite(a.water_level) \
@@ -485,6 +497,19 @@ class ExtinguishIndoorFire(AgentTask):
                 if cold.update(soak.update(self._hot(detected, fire_id), watered, pumped, a.backend.now()),
                                watered):
                     break
+                if pumping and soak.done:                    # soaked: confirm with the pump off
+                    a.stop_pump()
+                    pumping = False
+                    cold.restart()
+                    a.backend.loginfo(f'[{self.name}] fire {fire_id} soaked ({pumped:.2f} L): pump off, '
+                                      f'out once it reads cold {cold.checks} times in a row without water')
+                elif not pumping and not soak.done:          # hot again without water: it still burns
+                    if a.water_empty():
+                        break
+                    a.backend.loginfo(f'[{self.name}] fire {fire_id} shows hot again with the pump off: '
+                                      'watering it again')
+                    a.start_pump()
+                    pumping, flow = True, WaterFlow(a.backend.now())
                 if detected is not None and cold.seen_hot and frozen == bool(detected):
                     frozen = not detected                # the detector lost it: nothing corrects the aim
                     self._freeze_aim(frozen)
