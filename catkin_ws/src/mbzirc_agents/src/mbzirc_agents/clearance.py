@@ -28,6 +28,14 @@ Rules:
   `hold_max_age`, then the fallback applies until the release; a stale estimate is not held. Why: a reading after a gap is taken without the jump test (a re-fix is
   believed at once), so a UAV held 1.5 s over a floor-1 window's sill (1.5 m above the storey's floor
   in the plan) took the sill for that floor, believed its fix 1.5 m low and climbed into the lintel.
+- while a hold lasts, the UAV's own vertical velocity (the autopilot's, `on_velocity`: inertial, it does not
+  drift with the GNSS error) is integrated from the true height at the hold's start (its GNSS height less
+  the estimate then): the true height in the opening is that plus the climb since (`true_z`), and e is the
+  GNSS height less it, so the estimate follows the GNSS error's wander instead of freezing, and stays fresh
+  up to `tracked_hold_max_age` while velocities keep coming (no velocity for `max_age`: the tracking ends,
+  the held estimate's own `hold_max_age` applies). Why: the error wanders 0.3-0.5 m within 4 s; a frozen
+  estimate let UAVs that stalled in a window follow that wander into its lintel or sill (realistic seeds
+  101, 106: 0.5-0.8 m off the middle they had centred on after 5-10 s in the wall) and went stale after 8 s.
 Pure: no ROS, no clock of its own (times are passed in), tested in test_clearance.py.
 """
 from __future__ import annotations
@@ -51,6 +59,8 @@ class ClearanceConfig:
     filter_tau: float = 0.3         # s: smoothing of e (noise of the fix and of the altimeter)
     horizon: float = 1.0            # s: a velocity may close the height to the bound in this time, not less
     hold_max_age: float = 8.0       # s: an estimate held through an opening (e drifts ~0.2 m in that time)
+    tracked_hold_max_age: float = 30.0  # s: a hold tracked by the vertical velocity (an inertial velocity's
+    #                                     error integrates to centimetres in that time, e's wander to metres)
 
 
 def surfaces_at(x: float, y: float, footprints: Sequence[Sequence[float]], floor_heights: Sequence[float],
@@ -85,6 +95,10 @@ class ClearanceGuard:
         self.valid_time = -math.inf             # stamp of the last valid reading
         self.holding = False                    # passing an opening: readings ignored until the release
         self.held_until = -math.inf             # the held estimate counts as fresh until then
+        self.hold_start = -math.inf
+        self.held_true_z: Optional[float] = None  # true z at the hold's start, while the velocity tracks it
+        self.climb = 0.0                        # m climbed since then (integrated vertical velocity)
+        self.velocity_time = -math.inf          # stamp of the last vertical velocity integrated
         self.last_problem = 'no altimeter reading yet'
 
     # ---- input -------------------------------------------------------------------------------------------
@@ -137,24 +151,66 @@ class ClearanceGuard:
         self.surface, self.valid_time, self._last = surface, stamp, (h, z)
         self.last_problem = 'none since (no reading arrived)'
 
+    def on_velocity(self, vz: float, stamp: float, gnss_z: float) -> None:
+        """The UAV's vertical velocity (m/s, the autopilot's) at `stamp`, when its GNSS height was gnss_z: while a
+        tracked hold lasts, integrated into the climb since its start, and e follows (see the rules). A gap
+        of more than max_age between two ends the tracking (the climb meanwhile is unknown); a NaN is
+        ignored."""
+        if self.held_true_z is None or not (math.isfinite(vz) and math.isfinite(gnss_z)):
+            return
+        dt = stamp - self.velocity_time
+        if dt > self.cfg.max_age:
+            self.held_true_z = None                     # not tracked any more: the held estimate's own age rule
+            self.held_until = min(self.held_until, self.hold_start + self.cfg.hold_max_age)
+            self.last_problem = f'no vertical velocity for {dt:.1f} s while passing an opening'
+            return
+        if dt > 0.0:
+            self.climb += float(vz) * dt
+            self.velocity_time = float(stamp)
+            self.error = float(gnss_z) - (self.held_true_z + self.climb)
+
     # ---- state ---------------------------------------------------------------------------------------------
     def fresh(self, now: float) -> bool:
-        """True when the last valid reading is at most max_age old, or the estimate is held."""
-        return now - self.valid_time <= self.cfg.max_age or (self.error is not None and now <= self.held_until)
+        """True when the last valid reading is at most max_age old, or the estimate is held (a tracked hold:
+        while its velocities keep coming)."""
+        if now - self.valid_time <= self.cfg.max_age:
+            return True
+        if self.error is None or now > self.held_until:
+            return False
+        return self.held_true_z is None or now - self.velocity_time <= self.cfg.max_age
 
-    def hold(self, now: float) -> bool:
+    def tracking(self, now: float) -> bool:
+        """True while a hold's true height is tracked by the vertical velocity (fresh, see on_velocity)."""
+        return self.held_true_z is not None and now <= self.held_until and now - self.velocity_time <= self.cfg.max_age
+
+    def true_z(self, gnss_z: float, now: float) -> Optional[float]:
+        """The UAV's true height: while tracking, the hold's start height plus the climb since (no GNSS in it:
+        not even its noise); else the GNSS height less a fresh e; None without either."""
+        if self.tracking(now):
+            return self.held_true_z + self.climb
+        if self.fresh(now) and self.error is not None:
+            return float(gnss_z) - self.error
+        return None
+
+    def hold(self, now: float, gnss_z: Optional[float] = None) -> bool:
         """Ignore readings until release(); the estimate as it is now counts as fresh for at most
-        hold_max_age. False when it is not fresh (nothing to hold: the fallback applies meanwhile)."""
+        hold_max_age, or, given the GNSS height now (gnss_z), is tracked by the vertical velocity from the
+        true height now for at most tracked_hold_max_age. False when it is not fresh (nothing to hold: the
+        fallback applies meanwhile)."""
         self.holding = True
         if self.error is None or now - self.valid_time > self.cfg.max_age:
             return False
+        self.hold_start = now
         self.held_until = now + self.cfg.hold_max_age
+        if gnss_z is not None and math.isfinite(gnss_z):
+            self.held_true_z, self.climb, self.velocity_time = float(gnss_z) - self.error, 0.0, now
+            self.held_until = now + self.cfg.tracked_hold_max_age
         return True
 
     def release(self) -> None:
         """End a hold: readings count again (after a hold longer than max_age the next one is taken as it is,
         as after any gap: past the opening the altimeter sees a surface of the plan)."""
-        self.holding, self.held_until = False, -math.inf
+        self.holding, self.held_until, self.held_true_z = False, -math.inf, None
 
     def problem(self, now: float) -> str:
         """Why the guard is on its fallback now ('' when it is not)."""

@@ -1,7 +1,8 @@
 """ClearanceKeeper: a UAV agent's use of the clearance guard (clearance.py) on its motion commands.
 
 It feeds the guard with the downward altimeter (`altimeter`, sensor_msgs/Range) and the GNSS pose of the
-reading's time, bounds every go-to set-point and velocity the agent sends while flying (not while taking
+reading's time, and with the autopilot's velocity (`ual/velocity`, geometry_msgs/TwistStamped: its vertical
+part tracks the true height while a hold lasts, clearance.py), bounds every go-to set-point and velocity the agent sends while flying (not while taking
 off or landing: the UAL owns those), and watches the held set-point at the control rate: the vertical GNSS
 error wanders while the UAV holds, which moves its true height, so a set-point that has become too low is
 sent again, raised. A stale or invalid altimeter gives a throttled error and the guard's GNSS fallback.
@@ -13,6 +14,7 @@ import threading
 from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
+from geometry_msgs.msg import TwistStamped
 from sensor_msgs.msg import Range
 
 from . import constants as C
@@ -39,16 +41,24 @@ class ClearanceKeeper:
         self.velocity_time = -math.inf           # backend time of the last velocity command
         self.raised = 0                          # set-points raised so far (tests, log)
         agent.iface.add_subscriber(None, 'altimeter', Range, self._on_range)
+        agent.iface.add_subscriber(None, 'ual/velocity', TwistStamped, self._on_velocity)
 
     # ---- input ---------------------------------------------------------------------------------------------
     def _on_range(self, msg: Range) -> None:
+        self._feed(msg, lambda stamp, gnss: self.guard.on_reading(msg.range, stamp, gnss[:3]))
+
+    def _on_velocity(self, msg: TwistStamped) -> None:
+        self._feed(msg, lambda stamp, gnss: self.guard.on_velocity(msg.twist.linear.z, stamp, gnss[2]))
+
+    def _feed(self, msg: Any, to_guard: Callable[[float, np.ndarray], None]) -> None:
+        """to_guard(stamp, GNSS pose at the stamp) of a sensor message, under the lock; nothing before a pose."""
         a = self.agent
         if a.pose is None:
             return
         stamp = msg.header.stamp.to_sec() or a.backend.now()
         gnss = a.pose_at(stamp)
         with self.lock:
-            self.guard.on_reading(msg.range, stamp, gnss[:3])
+            to_guard(stamp, gnss)
 
     def _active(self) -> bool:
         """The guard bounds commands while the UAL flies under the agent's commands."""
@@ -61,13 +71,27 @@ class ClearanceKeeper:
             g = self.guard
             return g.error if g.fresh(self.agent.backend.now()) else None
 
+    def true_height(self) -> Optional[float]:
+        """The true height (arena z of base_link) by the guard (clearance.py `true_z`: while a hold is tracked,
+        by the vertical velocity since its start; else the GNSS height less a fresh e); None without either."""
+        a = self.agent
+        z = float(a.position(wait=0.0)[2])
+        with self.lock:
+            return self.guard.true_z(z, a.backend.now())
+
+    def tracking(self) -> bool:
+        """True while a hold's true height is tracked by the vertical velocity (clearance.py)."""
+        with self.lock:
+            return self.guard.tracking(self.agent.backend.now())
+
     def hold_estimate(self, why: str) -> bool:
         """From now until release_estimate(), altimeter readings are ignored and the vertical error estimate is
-        held as it is (clearance.py, `hold`), e.g. while the UAV's frame is in an opening whose sill the
-        altimeter would take for a floor. False (warned) when there is no fresh estimate to hold."""
+        held as it is, tracked by the vertical velocity (clearance.py, `hold`), e.g. while the UAV's frame is in
+        an opening whose sill the altimeter would take for a floor. False (warned) when there is no fresh
+        estimate to hold."""
         a = self.agent
         with self.lock:
-            held = self.guard.hold(a.backend.now())
+            held = self.guard.hold(a.backend.now(), float(a.position(wait=0.0)[2]) if a.pose is not None else None)
         if not held:
             a.backend.logwarn(f'clearance guard: no fresh altimeter estimate to hold while {why}')
         return held

@@ -151,3 +151,40 @@ def test_a_held_estimate_goes_stale_after_hold_max_age_readings_wait_for_the_rel
     g2.release()
     g2.on_reading(0.75, 12.3, (0.0, 0.0, 1.35))
     assert g2.fresh(12.4) and g2.error == pytest.approx(0.6)
+
+
+def test_a_hold_tracked_by_the_vertical_velocity_follows_the_gnss_error_and_the_climb(guard):
+    """Realistic seeds 101, 106: UAVs 5-10 s in a window's wall hit its lintel or sill, 0.5-0.8 m off the height
+    they had centred on; the held estimate of the vertical GNSS error stood still while the error wandered
+    0.3-0.5 m, and went stale after hold_max_age. Tracked by the UAV's vertical velocity from the hold's start:
+    the error falls 0.6 m in 6 s while the UAV truly sinks 0.3 m (vz -0.05 m/s, 30 Hz): the true height and
+    the error are both right, still fresh after hold_max_age, the GNSS noise of each fix not in the height."""
+    guard.on_reading(7.5, 10.0, (FLOOR1_WINDOW[0], 4.0, 7.8))           # e = +0.3, true z 7.5
+    assert guard.hold(10.0, 7.8)
+    t, true_z = 10.0, 7.5
+    noise = [0.05, -0.05, 0.0]
+    for k in range(1, 12 * 30 + 1):                                    # 12 s at 30 Hz
+        t = 10.0 + k / 30.0
+        vz = -0.05 if t <= 16.0 else 0.0
+        true_z += vz / 30.0
+        e = 0.3 - 0.1 * min(t - 10.0, 6.0)
+        guard.on_velocity(vz, t, true_z + e + noise[k % 3])
+    assert guard.true_z(99.0, t) == pytest.approx(7.2, abs=1e-6)        # 7.5 - 0.3: no GNSS in it
+    assert guard.fresh(t) and t > 10.0 + guard.cfg.hold_max_age
+    assert guard.error == pytest.approx(-0.3, abs=0.06)
+    assert guard.tracking(t)
+
+
+def test_a_tracked_hold_without_velocities_falls_back_to_the_held_estimates_age(guard):
+    """No vertical velocity for longer than max_age: the climb meanwhile is unknown, the tracking ends and the
+    held estimate counts only until hold_max_age after the hold's start (as without a velocity at all)."""
+    guard.on_reading(7.5, 10.0, (FLOOR1_WINDOW[0], 4.0, 7.8))
+    assert guard.hold(10.0, 7.8)
+    guard.on_velocity(0.0, 10.1, 7.8)
+    assert not guard.fresh(10.1 + guard.cfg.max_age + 0.05)           # velocities stopped: not fresh
+    guard.on_velocity(0.0, 12.0, 7.8)                                   # after a gap: no more tracking
+    assert not guard.tracking(12.0) and guard.fresh(12.0)
+    assert guard.true_z(7.8, 12.0) == pytest.approx(7.5)              # the GNSS height less the held e
+    assert not guard.fresh(10.1 + guard.cfg.hold_max_age)
+    guard.release()
+    assert not guard.tracking(12.0)

@@ -44,6 +44,30 @@ class Track:
         return bool(self.xs) and min(self.xs) >= x0 and max(self.xs) <= x1
 
 
+class VelocityFeed:
+    """The UAL's ual/velocity (the autopilot's, inertial: the true velocity, whatever moves the UAV, wind
+    included) at 30 Hz of sim time, from the fake UAL's true position; `on` False: silent."""
+
+    def __init__(self, be, ual):
+        from geometry_msgs.msg import TwistStamped
+        import rospy
+        self.on, self.stop = True, False
+
+        def loop():
+            last, t_last = ual.pos.copy(), be.clock.now()
+            while not self.stop:
+                be.clock.sleep(1.0 / 30.0)
+                now, pos = be.clock.now(), ual.pos.copy()
+                cb = be.subs.get('ual/velocity')
+                if cb is not None and self.on and now > t_last:
+                    m = TwistStamped()
+                    m.header.stamp = rospy.Time.from_sec(now)
+                    m.twist.linear.x, m.twist.linear.y, m.twist.linear.z = (pos - last) / (now - t_last)
+                    cb(m)
+                last, t_last = pos, now
+        be.clock.start_thread(loop, name='velocity feed')
+
+
 @pytest.fixture
 def uav():
     be = FakeBackend()
@@ -54,8 +78,10 @@ def uav():
     s.send(TakeOffGoal(height=3.0))
     assert s.wait(20) == 'succeeded'
     scene = LaserScene(be, ual, shift=(-1.0, 0.0))      # the window truly at x 13.5-15.5
+    feed = VelocityFeed(be, ual)
+    ual.velocity_feed = feed
     yield agent, ual, be, scene
-    stop_agent(agent, ual, be, scene)
+    stop_agent(agent, ual, be, scene, feed)
 
 
 def enter(be, timeout=120):
@@ -341,6 +367,59 @@ def test_realistic_101_105_108_a_gnss_height_error_drifting_in_the_wall_does_not
     be.clock.start_thread(drift, name='drift')
     track = enter_inside_the_window(be, ual)
     assert max(track.zs) - min(track.zs) < 0.1, (min(track.zs), max(track.zs))
+
+
+def slow_crossing_with_an_updraft(agent, ual, be, scene):
+    """While the frame is in the wall's reach: a headwind of 0.6 m/s (the UAV crosses at 0.2 m/s: ~4.5 s in the
+    wall) and an updraft of 0.15 m/s (or the UAL's hold between commands following its GNSS error's wander:
+    realistic seeds 101, 106). Returns the Track."""
+    wind_while_passing(agent, ual, be, scene, (0.0, 0.6, 0.15),
+                       where=lambda pos: pos[1] > WALL_Y[0] - 0.2 and any('into the wall' in m for m in be.infos))
+    track = Track(be, ual, WALL_Y, UAV_R, WINDOW_X)
+    s, status = enter(be)
+    assert status == 'succeeded', s.result.message
+    return track
+
+
+def test_realistic_101_106_a_uav_slowed_in_the_wall_holds_its_height_by_its_vertical_velocity(uav):
+    """Realistic seeds 101, 106: UAVs slowed 5-10 s in a window's wall, with no vertical command there (open
+    loop since the altimeter sees the sill), rose or sank 0.5-0.8 m and hit the lintel or the sill. Here an
+    updraft lifts the UAV 0.15 m/s for the ~4.5 s of a crossing slowed by a headwind: 0.7 m open loop; held on
+    the height at the wall's entry plus the climb by its vertical velocity, it stays within 0.2 m.
+    Before: it rose 0.7 m into the lintel's reach."""
+    agent, ual, be, scene = uav
+    track = slow_crossing_with_an_updraft(agent, ual, be, scene)
+    assert max(track.zs) - min(track.zs) < 0.2, (min(track.zs), max(track.zs))
+    assert max(track.zs) < 8.5 - UAV_R - 0.15, max(track.zs)
+
+
+def test_without_a_vertical_velocity_the_wall_is_crossed_with_no_vertical_command(uav):
+    """No ual/velocity (an autopilot that does not publish it): no tracking, nothing to steer the height on in
+    the wall; no vertical command there (the GNSS height's error would move it), as before the tracking."""
+    agent, ual, be, scene = uav
+    ual.velocity_feed.on = False
+    track = slow_crossing_with_an_updraft(agent, ual, be, scene)
+    assert max(track.zs) - min(track.zs) > 0.4, (min(track.zs), max(track.zs))    # the updraft, unopposed
+
+
+def test_a_stall_in_the_wall_backs_out_at_once(uav):
+    """Realistic seeds 101, 106: UAVs made no progress for 4-10 s in a window's wall ('3.3, 3.4, 3.0, 2.5, 2.6 m to
+    go') and hit its frame meanwhile; the passage waited ~opening_timeout (20 s) before backing out. Here a
+    headwind as strong as the crossing speed once the frame is in the wall: within WALL_STALL (2 s) and the way
+    back the UAV is out in front of the wall, the passage failed 'no progress in the window's wall'."""
+    from mbzirc_agents.tasks import passage
+    wall_stall = getattr(passage, 'WALL_STALL', 2.0)
+    agent, ual, be, scene = uav
+    wind_while_passing(agent, ual, be, scene, (0.0, agent.p.opening_pass_speed, 0.0),
+                       where=lambda pos: any('into the wall' in m for m in be.infos))
+    done = []
+    spent = crossing_time(agent, be, ual, (WALL_Y[0] - UAV_R, WALL_Y[1] + UAV_R), lambda: bool(done) or scene.stop)
+    s, status = enter(be)
+    done.append(True)
+    assert status == 'aborted' and "no progress in the window's wall" in s.result.message, s.result.message
+    assert 'backed out' in s.result.message, s.result.message
+    assert ual.pos[1] > WALL_Y[1] + UAV_R, f'not out of the wall: {ual.pos}'
+    assert spent[0] < wall_stall + 2.0, spent[0]
 
 
 def test_a_passage_ends_clear_of_the_wall_whatever_the_gnss_error_does_meanwhile(uav):

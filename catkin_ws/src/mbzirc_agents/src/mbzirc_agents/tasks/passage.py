@@ -20,8 +20,10 @@ Safety: the laser blind (every beam NaN) or silent -> the robot holds; an openin
 `~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
 robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
 nearer than `~opening_keep_off` (control.keep_off_return); no progress through it for `~opening_timeout`
-s -> the robot backs out the way it came in (to where the passage started) before the TaskError, so
-that no later leg starts inside the wall.
+s, or for WALL_STALL s once its frame is in the wall's reach -> the robot backs out the way it came in (to
+where the passage started) before the TaskError, so that no later leg starts inside the wall. In the wall a
+UAV holds its height on the height at the wall's entry plus its climb since by its own vertical velocity
+(`_keep_height`): neither the altimeter (it sees the sill) nor the GNSS height (its error wanders).
 """
 from __future__ import annotations
 
@@ -54,6 +56,9 @@ PROGRESS_STEP = 0.1        # m along the way through that counts as progress (re
 # few decimetres while the robot goes through (realistic seed 101: a UAV that had entered floor 2 by facade
 # B's window was truly 0.33 m off the wall's inner face and hit it going down to its search height)
 GNSS_DRIFT_MARGIN = 0.5
+# s without progress (PROGRESS_STEP) with the frame in the wall's reach before the robot backs out: in the wall
+# a stall is exposure, never a wait (realistic seeds 101, 106: UAVs stalled 4-10 s in windows and hit them)
+WALL_STALL = 2.0
 DOORWAY_MISS = 1.0         # m: a leg meeting the wall this far beside a doorway is meant for it (GNSS error)
 
 
@@ -152,12 +157,12 @@ class LaserPassage:
         self._scan = (msg, now, pose)
 
     def height_now(self) -> Optional[float]:
-        """The UAV's true height (arena z of base_link): its GNSS height corrected by the vertical GNSS error
-        its clearance guard estimates from the altimeter (clearance.py); None without a fresh estimate (or
+        """The UAV's true height (arena z of base_link) by its clearance guard (clearance.py `true_z`): its GNSS
+        height corrected by the vertical GNSS error estimated from the altimeter, or in an opening's wall the
+        height at the wall plus its climb since by its vertical velocity; None without a fresh estimate (or
         a guard: the UGV). Why: the GNSS height is off by decimetres and a window is 2 m tall."""
         keeper = getattr(self.agent, 'clearance', None)
-        e = None if keeper is None else keeper.vertical_error()
-        return None if e is None else float(self.agent.position()[2] - e)
+        return None if keeper is None else keeper.true_height()
 
     def _fresh_scan(self) -> Optional[Any]:
         """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
@@ -389,18 +394,21 @@ class LaserPassage:
         return _vz_towards(height, z), abs(height - z) <= VERTICAL_TOLERANCE
 
     def _keep_height(self, height: Optional[float], in_wall: bool) -> float:
-        """vz back to height (true) by a fresh altimeter estimate before the wall; 0 without one (never by the
-        GNSS height alone: it is off by decimetres) and 0 from the frame going into the wall on (in_wall).
+        """vz back to height (true): before the wall by a fresh altimeter estimate; from the frame going into
+        the wall on (in_wall) by the height at the wall plus the climb since, integrated from the autopilot's
+        vertical velocity (clearance.py, a tracked hold); 0 without either (never by the GNSS height alone:
+        it is off by decimetres, and its error wanders).
 
-        Why in the wall: the altimeter sees the sill there, so the estimate of the vertical GNSS error is
-        held as it was at the wall (clearance.py, `hold`), while the error itself goes on wandering; steering
-        the GNSS height corrected by that held estimate makes the UAV follow the error's drift (realistic
-        benchmark bags: the error moved 0.3-0.5 m within 4 s in a window, and a UAV steered so rose 0.43 m;
-        UAVs hit lintels 0.5-0.75 m above the middle they had centred on). Commanding no vertical speed
-        leaves the height to the autopilot's own velocity hold, which the GNSS error's drift does not move."""
-        if in_wall:
+        Why in the wall: the altimeter sees the sill there, and the GNSS error wanders 0.3-0.5 m within 4 s
+        (realistic benchmark bags); steered on the GNSS height a UAV follows that wander (one rose 0.43 m),
+        and with no vertical command at all nothing brings it back when something else moves it: the UAL's
+        position hold between commands follows the GNSS error, gusts, a stall (realistic seeds 101, 106: UAVs
+        stalled 5-10 s in a window hit its lintel 0.5 m above, or its sill 0.8 m below, the middle they had
+        centred on). The integrated vertical velocity drifts neither with the GNSS error nor with time."""
+        keeper = getattr(self.agent, 'clearance', None)
+        if height is None or (in_wall and (keeper is None or not keeper.tracking())):
             return 0.0
-        z = self.height_now() if height is not None else None
+        z = self.height_now()
         return 0.0 if z is None else _vz_towards(height, z)
 
     def _centre(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
@@ -501,6 +509,8 @@ class LaserPassage:
             if now - best_t > a.p.opening_timeout or now - t0 > timeout:
                 raise TaskError(f'not through the {kind} after {now - t0:.0f} s ({to_go:.1f} m left, '
                                 f'no progress for {now - best_t:.0f} s)')
+            if crossing.started and done < clear_at and now - best_t > WALL_STALL:
+                raise TaskError(f'no progress in the {kind}\'s wall for {now - best_t:.1f} s ({to_go:.1f} m left)')
             msg = self._fresh_scan()
             if msg is None:
                 self._hold(heading)                  # blind or silent laser: no motion we cannot see
@@ -533,7 +543,10 @@ class LaserPassage:
                     half = width / 2
             to_face = math.inf if wall is None else wall - done
             aligned = abs(wrap_angle(p[3] - heading)) <= a.p.yaw_tolerance
+            started = crossing.started
             v, note = self._pass_velocity(ctl, crossing, lateral, half, to_face, reach, done < clear_at, aligned)
+            if crossing.started and not started:
+                best, best_t = done, now             # the wall's stall clock starts at its entry
             task.feedback('PASSING', f'through the {kind}: {to_go:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside') + note)
             self._command(v, heading, msg, self._keep_height(height, crossing.started))
