@@ -488,14 +488,17 @@ class ExtinguishIndoorFire(AgentTask):
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
                 looking = at_pose and self.on_jet                # where it saw the fire hot, the jet on it
-                watered = (flow.update(a.water_level, a.backend.now()) or not pumping) and looking
+                flowing = flow.update(a.water_level, a.backend.now())
+                watered = (flowing or not pumping) and looking
                 if first_level is None and math.isfinite(a.water_level):
                     first_level = a.water_level
                 pumped = 0.0 if first_level is None or not math.isfinite(a.water_level) \
                     else first_level - a.water_level
                 detected = a.fire_detected()
-                if cold.update(soak.update(self._hot(detected, fire_id), watered, pumped, a.backend.now()),
-                               watered):
+                hot = self._hot(detected, fire_id)
+                if hot is False and not watered:
+                    self._say_why_not_counted(fire_id, pose, here, flowing or not pumping)
+                if cold.update(soak.update(hot, watered, pumped, a.backend.now()), watered):
                     break
                 if pumping and soak.done:                    # soaked: confirm with the pump off
                     a.stop_pump()
@@ -522,6 +525,19 @@ class ExtinguishIndoorFire(AgentTask):
         out, why = dry_tank_verdict(cold)
         a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {why}')
         return out, 'extinguished' if out else why
+
+    def _say_why_not_counted(self, fire_id: int, pose, here, flowing: bool) -> None:
+        """Log (throttled) why a cold answer does not count: no water flowing, off the watering pose (how far,
+        how much turned), or the jet's height not on the hot spot yet."""
+        why = [] if flowing else ['no water flowing (the tank level still)']
+        off, turned = math.dist(pose[:3], here[:3]), abs(wrap_angle(here[3] - pose[3]))
+        if not self._at(pose, here):
+            why.append(f'{off:.2f} m and {math.degrees(turned):.1f} deg off the watering pose (at most '
+                       f'{WATERING_POSE_TOLERANCE} m, {math.degrees(self.agent.p.yaw_tolerance):.1f} deg)')
+        if not self.on_jet:
+            why.append("the jet's height not on the hot spot yet")
+        self.agent.backend.loginfo_throttle(2.0, f'[{self.name}] fire {fire_id} reads cold, not counted: '
+                                                 + '; '.join(why))
 
     def _hot(self, detected: Optional[bool], fire_id: int) -> Optional[bool]:
         """Hot, cold or no evidence (None), for the soak and the cold check: hot while the detector sees the fire
