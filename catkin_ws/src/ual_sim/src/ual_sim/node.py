@@ -264,6 +264,8 @@ class RobotIO:
         tf = None
         if self.due_pose(now):
             x, y, z, yaw = sim.reported_pose(r)
+            vel = sim.reported_velocity(r) if (self.pub_vel.get_num_connections()
+                                               or self.pub_odom.get_num_connections()) else None
             q = yaw_quat(yaw)
             if self.pub_pose.get_num_connections():
                 m = self.m_pose
@@ -274,7 +276,7 @@ class RobotIO:
             if self.pub_vel.get_num_connections():
                 m = self.m_vel
                 m.header.stamp = stamp
-                m.twist.linear = Vector3(*r.vel)
+                m.twist.linear = Vector3(*vel)
                 m.twist.angular = Vector3(0.0, 0.0, r.yaw_rate)
                 self.pub_vel.publish(m)
             if self.pub_odom.get_num_connections():
@@ -283,7 +285,7 @@ class RobotIO:
                 m.pose.pose.position = Point(x, y, z)
                 m.pose.pose.orientation = q
                 c, s = math.cos(yaw), math.sin(yaw)   # odom twist is in the child (body) frame
-                m.twist.twist.linear = Vector3(c * r.vel[0] + s * r.vel[1], -s * r.vel[0] + c * r.vel[1], r.vel[2])
+                m.twist.twist.linear = Vector3(c * vel[0] + s * vel[1], -s * vel[0] + c * vel[1], vel[2])
                 m.twist.twist.angular = Vector3(0.0, 0.0, r.yaw_rate)
                 self.pub_odom.publish(m)
             last_state, last_time = self.state_sent

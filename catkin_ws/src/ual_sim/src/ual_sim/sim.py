@@ -83,7 +83,7 @@ class Simulation:
         """Advance everything by dt seconds of sim time."""
         self.time += dt
         rng = self.rng if self.wind else _NO_WIND
-        if self.uncertainty is not None and self.uncertainty.gnss:
+        if self.uncertainty is not None and (self.uncertainty.gnss or self.uncertainty.velocity):
             self._follow_gnss_bias(dt)
         for r in self.robots.values():
             before = r.refills
@@ -226,6 +226,14 @@ class Simulation:
         if self.uncertainty is not None and self.uncertainty.gnss:
             p[:3] += self.uncertainty.gnss_fix(r.id)   # GNSS error (a crashed robot's receiver still reports)
         return p
+
+    def reported_velocity(self, r: Robot) -> np.ndarray:
+        """Velocity the robot reports (vx, vy, vz in the arena frame): the truth plus the autopilot's
+        velocity-estimate error (uncertainty.VelocityError) when the profile has one."""
+        v = np.asarray(r.vel, dtype=float)
+        if self.uncertainty is not None and self.uncertainty.velocity and not r.crashed:
+            v = v + self.uncertainty.velocity_error(r.id)
+        return v
 
     def gnss_valid(self, r: Robot) -> bool:
         """Whether the robot's reported pose follows a GNSS fix now (False indoors with `denied_indoors`)."""

@@ -74,11 +74,18 @@ class GnssConfig:
     indoor_vel_bias_std: float = 0.02
     indoor_vel_bias_tau: float = 60.0
     indoor_scale_std: float = 0.02
+    vel_white_std: float = 0.0
+    vel_bias_std: float = 0.0
+    vel_bias_tau: float = 20.0
 
     @property
     def enabled(self) -> bool:
         return self.denied_indoors or max(self.bias_xy_std, self.bias_z_std, self.white_xy_std,
                                           self.white_z_std) > 0.0
+
+    @property
+    def velocity_enabled(self) -> bool:
+        return max(self.vel_white_std, self.vel_bias_std) > 0.0
 
 
 class GaussMarkov:
@@ -143,6 +150,26 @@ class GnssError:
         if self.denied:
             return self.error.copy()
         return self.error + self.white_std * self.rng.standard_normal(3)
+
+
+class VelocityError:
+    """The error of one robot's reported velocity (`ual/velocity`, `ual/odom`'s twist): the autopilot's
+    GNSS/inertial velocity estimate, per axis a Gauss-Markov bias (std `vel_bias_std`, correlation time
+    `vel_bias_tau`: the accelerometers' residual bias) plus white noise (`vel_white_std`: the receiver's
+    Doppler velocity). Why a model at all: a robot that integrates its velocity (e.g. to hold a height
+    through a window without its altimeter) must meet the drift a real estimate has, not the truth."""
+
+    def __init__(self, cfg: GnssConfig, rng: np.random.Generator):
+        self.rng = rng
+        self.white_std = float(cfg.vel_white_std)
+        self.bias = GaussMarkov(np.full(3, float(cfg.vel_bias_std)), cfg.vel_bias_tau, rng)
+
+    def step(self, dt: float) -> None:
+        self.bias.step(dt)
+
+    def reading(self) -> np.ndarray:
+        """Error of one reported velocity (vx, vy, vz) in m/s."""
+        return self.bias.value + self.white_std * self.rng.standard_normal(3)
 
 
 def building_volumes(bmin: np.ndarray, bmax: np.ndarray, buildings: Sequence[str]) -> np.ndarray:
@@ -286,7 +313,8 @@ class UncertaintyConfig:
 
     @property
     def is_ideal(self) -> bool:
-        return not (self.gnss.enabled or self.laser.enabled or self.physics != PhysicsConfig())
+        return not (self.gnss.enabled or self.gnss.velocity_enabled or self.laser.enabled
+                    or self.physics != PhysicsConfig())
 
 
 def parse_profile(name: str, raw: Any) -> UncertaintyConfig:
@@ -310,8 +338,9 @@ def parse_profile(name: str, raw: Any) -> UncertaintyConfig:
         raise UncertaintyError(f"{w}.gnss.denied_indoors: must be true or false, got {denied!r}")
     gnss = GnssConfig(denied_indoors=denied, **{k: _num(g, k, f"{w}.gnss", getattr(GnssConfig, k)) for k in
                                                 ("bias_xy_std", "bias_z_std", "tau", "white_xy_std", "white_z_std",
-                                                 "indoor_vel_bias_std", "indoor_vel_bias_tau", "indoor_scale_std")})
-    for k in ("tau", "indoor_vel_bias_tau"):
+                                                 "indoor_vel_bias_std", "indoor_vel_bias_tau", "indoor_scale_std",
+                                                 "vel_white_std", "vel_bias_std", "vel_bias_tau")})
+    for k in ("tau", "indoor_vel_bias_tau", "vel_bias_tau"):
         if getattr(gnss, k) <= 0.0:
             raise UncertaintyError(f"{w}.gnss.{k}: must be > 0, got {getattr(gnss, k)}")
     laser = LaserConfig(**{k: _num(las, k, f"{w}.laser", 0.0) for k in
@@ -366,6 +395,8 @@ class TrialUncertainty:
         self.laser_rng = np.random.default_rng([int(seed), 18])
         self.gnss = ({rid: GnssError(cfg.gnss, np.random.default_rng([int(seed), 19, int(rid)]))
                       for rid in robot_ids} if cfg.gnss.enabled else {})
+        self.velocity = ({rid: VelocityError(cfg.gnss, np.random.default_rng([int(seed), 20, int(rid)]))
+                          for rid in robot_ids} if cfg.gnss.velocity_enabled else {})
         self.buildings = building_volumes(bmin, bmax, buildings)
 
     def step_gnss(self, dt: float, motion: Optional[Mapping[int, tuple]] = None) -> dict:
@@ -377,6 +408,8 @@ class TrialUncertainty:
             pos, vel = (motion or {}).get(rid, (None, None))
             indoors = pos is not None and self.cfg.gnss.denied_indoors and inside_building(pos, self.buildings)
             out[rid] = g.step(dt, indoors, vel)
+        for v in self.velocity.values():
+            v.step(dt)
         return out
 
     def gnss_bias(self, rid: int) -> np.ndarray:
@@ -394,13 +427,18 @@ class TrialUncertainty:
         g = self.gnss.get(rid)
         return g.fix() if g is not None else np.zeros(3)
 
+    def velocity_error(self, rid: int) -> np.ndarray:
+        """Error of one reported velocity of the robot (zero when the model is off)."""
+        v = self.velocity.get(rid)
+        return v.reading() if v is not None else np.zeros(3)
+
     def scan(self, ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
         if not self.cfg.laser.enabled:
             return ranges
         return corrupt_scan(ranges, self.cfg.laser, self.laser_rng, range_min, range_max)
 
 
-__all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "building_volumes",
+__all__ = ["PROFILES", "UncertaintyError", "GnssConfig", "GaussMarkov", "GnssError", "VelocityError", "building_volumes",
            "inside_building", "with_gnss_denied_indoors", "LaserConfig",
            "corrupt_scan", "PhysicsConfig", "Unknowns", "draw_unknowns", "sun_heated_normals",
            "UncertaintyConfig", "parse_profile", "profile", "TrialUncertainty"]

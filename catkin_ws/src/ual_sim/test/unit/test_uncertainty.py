@@ -76,6 +76,33 @@ def test_reported_pose_error_has_the_configured_spread(realistic):
     assert abs(e[:, :2].mean()) < 0.1
 
 
+def test_reported_velocity_error_has_the_configured_spread_and_wanders(realistic):
+    """The reported velocity is the truth plus a Gauss-Markov bias and white noise with the profile's stds;
+    integrated over a window passage's 10 s its error is centimetres to decimetres, never zero."""
+    g = realistic.gnss
+    assert g.vel_white_std > 0.0 and g.vel_bias_std > 0.0
+    w = load_world()
+    errs, drifts = [], []
+    for seed in range(600):
+        u = TrialUncertainty(realistic, seed, [2], 1, w.bmin, w.bmax, w.box_temp, w.box_building)
+        errs.append(u.velocity_error(2))
+        climb_error = 0.0
+        for _ in range(int(10.0 / DT)):
+            u.step_gnss(DT)
+            climb_error += u.velocity_error(2)[2] * DT
+        drifts.append(climb_error)
+    e = np.array(errs)
+    assert e[:, 2].std() == pytest.approx(math.hypot(g.vel_bias_std, g.vel_white_std), rel=0.12)
+    assert abs(e.mean()) < 0.01
+    d = np.array(drifts)
+    assert 0.5 * g.vel_bias_std * 10.0 < d.std() < 1.5 * math.hypot(g.vel_bias_std * 10.0, 0.1)
+    s = Simulation(w, seed=3, uncertainty=realistic, wind=False)      # and the simulation reports it
+    r = s.robots[2]
+    assert not np.array_equal(s.reported_velocity(r), r.vel)
+    ideal = Simulation(w, seed=3)
+    assert np.array_equal(ideal.reported_velocity(ideal.robots[2]), ideal.robots[2].vel)
+
+
 def test_a_hovering_uav_is_where_it_believes_only_in_the_reported_frame(realistic):
     """Commanded waypoints are in the reported frame: after arriving the *reported* position is the
     command (up to white noise), the true one is off by minus the bias, and it follows the bias as it
