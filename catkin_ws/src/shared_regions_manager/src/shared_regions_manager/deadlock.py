@@ -54,7 +54,7 @@ class YieldOrder:
         """The cycle (or the long wait for an idle holder) and the order in words (the manager's log line)."""
         if self.idle_for > 0.0:
             return (f'{self.winner}/{self.winner_label} {fmt_box(self.box)} has waited {self.idle_for:.0f} s for '
-                    f'{"/".join(f"{self.victim}/{l}" for l in self.victim_labels)}, and {self.victim} waits for '
+                    f'{" and ".join(f"{self.victim}/{l}" for l in self.victim_labels)}, and {self.victim} waits for '
                     f'nothing: {self.victim} is asked to move out of it')
         waits = ', '.join(f'{w.agent}/{w.label} {fmt_box(w.box)} waits for '
                           + ' and '.join(f'{o}/{l}' for o, l in w.blockers) for w in self.cycle)

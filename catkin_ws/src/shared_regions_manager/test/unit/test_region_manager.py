@@ -298,4 +298,4 @@ def test_a_long_wait_for_a_robot_that_waits_for_nothing_asks_that_robot_to_leave
     t, order = went[0]
     assert 15.0 <= t <= 16.0
     assert (order.victim, order.winner, order.winner_label, order.victim_labels) == ('2', '1', 'go_to', ('hold',))
-    assert 'waits for nothing' in order.describe() and '2/hold' in order.describe()
+    assert 'waited 15 s for 2/hold, and 2 waits for nothing' in order.describe()
