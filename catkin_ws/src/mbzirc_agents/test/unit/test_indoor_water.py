@@ -10,7 +10,7 @@ from mbzirc_comm_objs.srv import CheckFireResponse
 
 import fake_thermal
 from fake_backend import FakeBackend
-from fake_ual import start_uav, stop_agent
+from fake_ual import start_ugv, start_uav, stop_agent
 from mbzirc_agents import constants as C
 
 
@@ -563,6 +563,60 @@ def test_a_full_tank_puts_out_a_fire_needing_up_to_1_3_nominal_and_confirms_it_w
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
     assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
     assert sc.ual.water > 0.05, f'{sc.ual.water:.2f} L left: the tank ran dry on it'
+
+
+class UgvScene(Scene):
+    """The UGV at its watering pose, 1.5 m from a ground-floor fire, facing it; the thermal camera scripted."""
+
+    def __init__(self, hot_until=0.0, params=None):
+        self.be = FakeBackend()
+        self.statuses, self.hot_until, self.pumping_since, self.threads = [], hot_until, None, ()
+        self.be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
+        self.be.handlers['/set_object_status'] = lambda r: self.statuses.append(r.object_status) or type('R', (), {})()
+        self.agent, self.ual = start_ugv(self.be, (2.5, 0.0, 0.0), {'check_fire_time': 1.0, 'top_up_time': 1.0,
+                                                                     'wall_clearance': False, **(params or {})},
+                                       speedup=2.0)
+        o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_LOST, num_updates=50)
+        o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = 4.0, 0.0, 0.75
+        o.pose.covariance = [0.0] * 36
+        o.pose.covariance[0] = o.pose.covariance[7] = o.pose.covariance[14] = 0.2 ** 2
+        self.be.subs['/estimated_objects'](ObjectList(objects=[o]))
+
+
+class WanderingFix:
+    """The GNSS fix of a robot standing still wanders (`rate` m/s on each axis, z too) once it pumps: a UGV at
+    rest does not follow its fix (realistic profile: a 0.5 m bias correlated over 30 s, ~0.5 m in 10 s)."""
+
+    def __init__(self, sc, rate):
+        self.sc, self.rate, self.stop = sc, rate, False
+        sc.be.clock.start_thread(self._loop, name='wandering fix')
+
+    def _loop(self):
+        ual, clock = self.sc.ual, self.sc.be.clock
+        while not self.stop and not ual.pump:
+            clock.sleep(0.02)
+        t0 = clock.now()
+        while not self.stop:
+            with ual.lock:
+                ual.gnss_offset = self.rate * (clock.now() - t0) * np.ones(3)
+            clock.sleep(0.02)
+
+
+def test_realistic_ugv_a_fire_put_out_is_judged_out_while_its_gnss_fix_wanders(scenes):
+    """Realistic benchmark on 6b5ecb7: the UGV put out its ground-floor fire on its first tank in 8 of 8 runs,
+    but in 6 it reported 'the tank ran dry before 6 cold answers in a row (0 so far)': standing still while
+    its fix wandered (its controller holds no position at rest), it was 'off its watering pose' by GNSS and no
+    cold answer counted; the fire stayed active for top-up trips. A UGV translates only when told: its
+    heading says whether it still looks at the fire."""
+    sc = UgvScene(hot_until=1.0)
+    try:
+        fire = FadingFire(sc, need=1.2, start_water=2.0, heat=50.0)
+        sc.threads = (WanderingFix(sc, 0.06),)
+        s = sc.extinguish(timeout=60)
+        assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+        assert fire.progress() >= 1.0, f'judged out at {fire.progress():.3f} of its water'
+    finally:
+        sc.close()
 
 
 class JetCooledFire(FadingFire):
