@@ -20,7 +20,8 @@ Rules:
 - a leg with no more than the arrival tolerance to go is not guarded (the robot is there: it turns on the
   spot); returns beside or behind the robot never block (a door frame it passes, the wall it came through);
 - without a fresh scan the leg goes on (a throttled error says so): the guard adds a check, it is not
-  what moves the robot.
+  what moves the robot; a blind laser (a fresh scan whose every beam is NaN: no measurement at all, unlike
+  +inf, nothing within range) blocks the leg: the walls it would see are unknown.
 Pure geometry here (no ROS): `corridor_distances`, `blocking_distance` (the scan's returns: mbzirc_arena's
 `laser.scan_points` with keep_near, REP 117); `LegGuard` is a
 task's use of it (its scan subscription and the check passed to `RobotAgent.move_to`'s stop_when).
@@ -74,6 +75,20 @@ def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequenc
     return float(ahead.min()) if ahead.size >= MIN_BEAMS else None
 
 
+def free_ahead(points: np.ndarray, here: Sequence[float], direction: Sequence[float], half_width: float,
+               reach: float) -> Optional[float]:
+    """How far ahead along the unit direction the corridor of half_width is free of returns (the
+    MIN_BEAMS-th nearest one in it, no farther than reach); None when free as far as reach."""
+    ahead = np.sort(corridor_distances(points, here, direction, half_width, reach))
+    return float(ahead[MIN_BEAMS - 1]) if ahead.size >= MIN_BEAMS else None
+
+
+def is_blind(ranges: Sequence[float]) -> bool:
+    """True when no beam of a scan measured anything (every range NaN; REP 117 +-inf are measurements)."""
+    r = np.asarray(ranges, dtype=float)
+    return r.size > 0 and bool(np.all(np.isnan(r)))
+
+
 class LegGuard:
     """A motion task's check of its straight legs against its laser (`scan`).
 
@@ -115,6 +130,11 @@ class LegGuard:
         return scan_points(msg.ranges, msg.angle_min, msg.angle_increment, then, msg.range_min,
                            msg.range_max if msg.range_max > 0 else math.inf, keep_near=True)
 
+    def blind(self) -> bool:
+        """True when the latest fresh scan is blind (every beam NaN)."""
+        fresh = self._fresh()
+        return fresh is not None and is_blind(fresh[0].ranges)
+
     def stop_when(self, target: Sequence[float], tolerance: float):
         """A stop_when for RobotAgent.move_to on the straight leg to target: True (and `reason` set) when the
         laser sees the leg blocked; always False with ~leg_guard off."""
@@ -127,6 +147,9 @@ class LegGuard:
                 a.backend.logerr_throttle(5.0, f'[{self.task.name}] leg guard: no fresh laser scan, the leg goes '
                                                 'on unchecked')
                 return False
+            if self.blind():
+                self.reason = 'the laser is blind (every beam of its scan NaN): holding'
+                return True
             here = a.position()
             d = blocking_distance(points, here, target, a.p.leg_guard_half_width, a.p.leg_guard_stop_distance,
                                   tolerance)
@@ -151,4 +174,4 @@ class LegGuard:
             raise TaskError(f'{what}: {self.reason}')
 
 
-__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances']
+__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'free_ahead', 'is_blind']

@@ -1,11 +1,15 @@
 """UgvAgent: the UGV's tasks (go_to, search_indoor, extinguish_indoor_fire) on top of RobotAgent."""
 from __future__ import annotations
 
-from typing import Any, Dict
+import math
+from typing import Any, Dict, Optional, Sequence
 
 from mbzirc_arena.routing import path_length, plan_2d
+from mbzirc_arena.yaw import wrap_angle
 
 from . import constants as C
+from .agent_task import AgentTask, TaskError
+from .control import yaw_rate_to
 from .robot_agent import RobotAgent
 from .tasks import indoor, ugv, uav_motion as U
 from .uav_agent import register_tasks
@@ -29,6 +33,9 @@ UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.
                 'explore_view_range': 0.0}
 
 
+TURN_GAIN, TURN_MAX_RATE, TURN_MIN_RATE = 1.5, 0.8, 0.1   # 1/s, rad/s, rad/s: turning on the spot
+
+
 class UgvAgent(RobotAgent):
     """The UGV: drives around the building, enters through the door, puts out the indoor fire."""
     ROBOT_TYPE = 'ugv'
@@ -45,6 +52,43 @@ class UgvAgent(RobotAgent):
 
     def is_moving_state(self) -> bool:
         return self.ual_state == C.UAL_FLYING_AUTO
+
+    def move_to(self, task: AgentTask, target: Sequence[float], yaw: Optional[float], what: str,
+                tolerance: Optional[float] = None, stop_when: Optional[Any] = None) -> bool:
+        """RobotAgent.move_to, but a waypoint within the tolerance of where the UGV is (a turn where it stands:
+        a look around, facing a door) is turned on the spot on yaw-rate commands (turn_on_the_spot).
+        Why (realistic seed 108): a go-to is under way in the GNSS frame while the UGV turns, and the UAL
+        moves its true set-point by every change of the GNSS error meanwhile: turning to face an interior
+        doorway, the UGV moved 0.4 m sideways onto the doorway's edge."""
+        here = self.position()
+        tol = self.p.position_tolerance if tolerance is None else tolerance
+        if stop_when is None and yaw is not None and math.hypot(target[0] - here[0], target[1] - here[1]) <= tol:
+            self.turn_on_the_spot(task, yaw, what)
+            return True
+        return super().move_to(task, target, yaw, what, tolerance=tolerance, stop_when=stop_when)
+
+    def turn_on_the_spot(self, task: AgentTask, yaw: float, what: str) -> None:
+        """Turn to yaw on yaw-rate commands (no translation whatever the GNSS error does), within
+        ~yaw_tolerance; TaskError (stopped) when not there in time."""
+        timeout = abs(wrap_angle(yaw - self.position()[3])) / TURN_MIN_RATE + 10.0
+        end = self.backend.now() + timeout
+        try:
+            while True:
+                task.check_preempt()
+                self.raise_if_crashed(what)
+                error = wrap_angle(yaw - self.position()[3])
+                if abs(error) <= self.p.yaw_tolerance:
+                    break
+                if self.backend.now() > end:
+                    raise TaskError(f'{what}: not turned after {timeout:.0f} s ({math.degrees(error):.0f} deg left)')
+                rate = yaw_rate_to(0.0, error, gain=TURN_GAIN, max_rate=TURN_MAX_RATE)
+                rate = math.copysign(max(abs(rate), TURN_MIN_RATE), rate)
+                self.send_velocity((0.0, 0.0, 0.0), rate)
+                task.feedback('MOVING', f'{what}: {math.degrees(error):.0f} deg to turn')
+                self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
+        finally:
+            if self.is_moving_state():
+                self.send_velocity((0.0, 0.0, 0.0), 0.0)
 
     def cost_to_go_to(self, target) -> float:
         """Length of the planned 2D path (-1 when no path)."""

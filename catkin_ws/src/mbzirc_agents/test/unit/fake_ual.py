@@ -36,6 +36,7 @@ class FakeUal:
         self.state = State.LANDED_DISARMED
         self.goal = None
         self.vel = None
+        self.yaw_rate = 0.0              # of the latest velocity command (rad/s), followed with it
         self.vel_time = 0.0
         self.water = 2.0
         self.pump = False
@@ -95,6 +96,7 @@ class FakeUal:
             if msgs:
                 t = msgs[-1].twist.linear
                 self.vel, self.vel_time = np.array([t.x, t.y, t.z]), self.be.clock.now()
+                self.yaw_rate = msgs[-1].twist.angular.z
         if self.vel is not None and self.be.clock.now() - self.vel_time < 0.3:
             return self.vel
         return None
@@ -107,6 +109,8 @@ class FakeUal:
                 if v is not None and self.state in (State.FLYING_AUTO, State.FLYING_MANUAL):
                     self.goal = None
                     self.pos = self.pos + v * self.speedup * dt
+                    self.yaw = math.atan2(math.sin(self.yaw + self.yaw_rate * self.speedup * dt),
+                                          math.cos(self.yaw + self.yaw_rate * self.speedup * dt))
                 if self.goal is not None and self.state not in (State.LANDED_DISARMED, State.LANDED_ARMED):
                     g, gy = self.goal                       # (landed, it stays put as the GNSS error moves)
                     g = g - self.gnss_bias                  # flown in the frame of the GNSS fix

@@ -10,7 +10,7 @@ from mbzirc_comm_objs.msg import SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from laser_world import ANGLE_MIN, BEAMS, INC, cast, wall_boxes
-from mbzirc_agents.leg_guard import blocking_distance, corridor_distances
+from mbzirc_agents.leg_guard import blocking_distance, corridor_distances, free_ahead, is_blind
 from mbzirc_arena.laser import scan_points
 from fake_ual import goal_pose
 from test_passage import UAV_R, WALL_Y, enter, ugv, uav  # noqa: F401 - fixtures: a UGV, a UAV
@@ -77,6 +77,20 @@ def test_the_corridor_is_along_the_leg_not_the_heading():
     pts = np.array([[1.0, 1.0], [1.0, 1.1], [0.5, 0.0]])
     u = np.array([1.0, 1.0]) / math.sqrt(2.0)
     assert corridor_distances(pts, (0, 0), u, 0.2, 2.0) == pytest.approx([math.sqrt(2), 2.1 / math.sqrt(2)])
+
+
+def test_a_scan_with_every_beam_nan_is_blind_one_with_inf_or_a_return_is_not():
+    r = np.full(BEAMS, np.nan)
+    assert is_blind(r)
+    r[10] = np.inf                                               # REP 117: nothing within range, measured
+    assert not is_blind(r)
+    assert not is_blind(np.zeros(0))
+
+
+def test_the_free_way_ahead_is_to_the_second_nearest_return_in_the_corridor():
+    pts = points_seen(18.9 + 2.0, 14.0, math.pi, [(17.7, 6.9, 17.9, 19.3)])
+    assert free_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 4.0) == pytest.approx(3.0, abs=0.02)
+    assert free_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 2.5) is None
 
 
 # ---- missions' legs ----------------------------------------------------------------------------------------
@@ -184,3 +198,69 @@ def test_after_a_doorway_the_leg_goes_on_from_the_depth_reached_never_back_towar
     assert _not_behind((19.5, 11.0, 0.0), (20.2, 10.6, 0.0, 0.0), 0.0) == pytest.approx((20.2, 11.0, 0.0))
     assert _not_behind((21.0, 11.0, 0.0), (20.2, 10.6, 0.0, 0.0), 0.0) == (21.0, 11.0, 0.0)
     assert _not_behind((16.5, 11.0), (16.0, 11.2, 0.0, math.pi), math.pi) == pytest.approx((16.0, 11.0))
+
+
+def test_a_ugv_leg_with_a_blind_laser_holds_and_fails(ugv):
+    """Every beam NaN (a laser that measures nothing): the leg does not start, the robot holds, the search
+    fails saying so. Before: no return counted, the leg went on unchecked."""
+    agent, ual, be, scene = ugv
+    ual.pos = np.array([20.0, 14.0, 0.0])
+    ual.yaw = math.pi
+    be.clock.sleep(3.0)
+    scene.shift = (0.0, 0.0)
+    scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 19.3)]
+    scene.blind = True
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(18.0, 14.0, 0.0, math.pi)]))
+    assert s.wait(200) == 'aborted', s.result.message
+    assert 'blind' in s.result.message, s.result.message
+    assert ual.pos[0] > 20.0 - 0.15, f'moved on to {ual.pos}'
+
+
+def test_realistic_108_a_ugv_turning_on_the_spot_does_not_follow_its_gnss_error(ugv):
+    """Realistic seed 108 (benchmark): at the search path's waypoint by the interior doorway the UGV turned
+    to face it and moved 0.4 m onto the doorway's edge: a go-to is under way in the GNSS frame during the
+    turn (ual_sim: until it is done; the fake UAL: until the next command) and the UAL moves its true
+    set-point by every change of the GNSS error meanwhile. Turns on the spot are yaw-rate commands now."""
+    agent, ual, be, scene = ugv
+    ual.pos = np.array([20.0, 11.0, 0.0])
+    ual.yaw = 0.0
+    be.clock.sleep(3.0)
+    scene.shift = (0.0, 0.0)
+    scene.boxes = wall_boxes(0.9)
+    state = {'stop': False}
+
+    def drift():                                   # the GNSS error moves 0.15 m/s east, 4 s
+        t0 = be.clock.now()
+        while not state['stop'] and be.clock.now() - t0 < 4.0:
+            ual.gnss_bias = np.array([0.15 * (be.clock.now() - t0), 0.0, 0.0])
+            be.clock.sleep(0.05)
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(20.0, 11.0, 0.0, math.pi)]))
+    be.clock.start_thread(drift, name='gnss drift')
+    assert s.wait(200) == 'succeeded', s.result.message
+    be.clock.sleep(2.0)
+    state['stop'] = True
+    assert abs(math.atan2(math.sin(ual.yaw - math.pi), math.cos(ual.yaw - math.pi))) < 0.2, ual.yaw
+    assert math.dist(ual.pos[:2], (20.0, 11.0)) < 0.1, f'moved to {ual.pos} turning'
+
+
+def test_realistic_108_a_ugv_legs_set_points_stay_short_of_the_walls_its_laser_sees(ugv):
+    """Realistic seed 108 (verification run): driving the leg its guard had held once, the UGV saw the
+    doorway's edge only 0.67 m ahead, at 1 m/s to a set-point in the wall (a whole leg sent at once runs on
+    between the checks of a loaded agent). Now no set-point is sent farther than 1 m ahead nor within the
+    guard's stop distance of the wall the laser sees: wherever the agent stalls, the UGV stops short."""
+    agent, ual, be, scene = ugv
+    ual.pos = np.array([21.5, 14.0, 0.0])
+    ual.yaw = math.pi
+    be.clock.sleep(3.0)
+    scene.shift = (0.0, 0.0)
+    scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 19.3)]   # no doorway
+    n = len(ual.waypoints)
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(16.0, 14.0, 0.0, math.pi)]))
+    assert s.wait(200) == 'aborted', s.result.message
+    sent = [w[0] for w in ual.waypoints[n:]]
+    assert sent, 'no set-point sent'
+    assert min(p[0] for p in sent) > 17.9 + STOP - 0.15, [round(p[0], 2) for p in sent]
+    assert ual.pos[0] > 17.9 + UGV_R + 0.3, ual.pos
