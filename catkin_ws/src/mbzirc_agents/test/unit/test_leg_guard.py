@@ -264,3 +264,28 @@ def test_realistic_108_a_ugv_legs_set_points_stay_short_of_the_walls_its_laser_s
     assert sent, 'no set-point sent'
     assert min(p[0] for p in sent) > 17.9 + STOP - 0.15, [round(p[0], 2) for p in sent]
     assert ual.pos[0] > 17.9 + UGV_R + 0.3, ual.pos
+
+
+def test_realistic_108_a_waypoint_at_the_doorways_edge_is_passed_by_and_the_doorway_sensed(ugv):
+    """Realistic seed 108: the search path's waypoint (19.5, 11.0) before the interior doorway (y 10-12) was,
+    with the UGV's GNSS error, truly at the doorway's south edge. Here the error puts it 0.6 m south and
+    1.1 m west of its GNSS place: the leg to it is held short of the wall, and the search goes on from there
+    to the next waypoint, through the doorway its laser finds, clear of both edges. Before: the search
+    failed at the blocked waypoint (and the UGV hit the edge when it was sent again)."""
+    agent, ual, be, scene = ugv
+    ual.gnss_bias = np.array([1.1, 0.6, 0.0])
+    ual.pos = np.array([21.1, 15.9, 0.0])                      # at (22.2, 16.5) by its GNSS
+    ual.yaw = math.pi
+    be.clock.sleep(3.0)
+    scene.shift = (0.0, 0.0)
+    inner = [(17.7, 6.9, 17.9, 10.0), (17.7, 12.0, 17.9, 19.3)]
+    scene.boxes = wall_boxes(0.9) + inner
+    closest = Closest(be, ual, inner)
+    s = be.servers['search_indoor_action']
+    # already inside, the UGV searches the path back from its nearest waypoint: (19.5, 11.0), then (16.5, 11.0)
+    s.send(SearchIndoorGoal(floor=0, path=[goal_pose(16.5, 11.0, 0.0, math.pi), goal_pose(19.5, 11.0, 0.0, 0.0)]))
+    assert s.wait(300) == 'succeeded', s.result.message
+    closest.stop = True
+    assert ual.pos[0] < 17.7 - UGV_R, f'not through the doorway: {ual.pos}'
+    assert closest.least > UGV_R + 0.1, f'{closest.least:.2f} m off the wall'
+    assert any('at a wall by the laser' in m for m in be.warns), be.warns
