@@ -32,7 +32,7 @@ Rules:
   drift with the GNSS error) is integrated from the true height at the hold's start (its GNSS height less
   the estimate then): the true height in the opening is that plus the climb since (`true_z`), and e is the
   GNSS height less it, so the estimate follows the GNSS error's wander instead of freezing, and stays fresh
-  up to `tracked_hold_max_age` while velocities keep coming (no velocity for `max_age`: the tracking ends,
+  up to `tracked_hold_max_age` (15 s) while velocities keep coming (no velocity for `max_age`: the tracking ends,
   the held estimate's own `hold_max_age` applies). Why: the error wanders 0.3-0.5 m within 4 s; a frozen
   estimate let UAVs that stalled in a window follow that wander into its lintel or sill (realistic seeds
   101, 106: 0.5-0.8 m off the middle they had centred on after 5-10 s in the wall) and went stale after 8 s.
@@ -59,8 +59,8 @@ class ClearanceConfig:
     filter_tau: float = 0.3         # s: smoothing of e (noise of the fix and of the altimeter)
     horizon: float = 1.0            # s: a velocity may close the height to the bound in this time, not less
     hold_max_age: float = 8.0       # s: an estimate held through an opening (e drifts ~0.2 m in that time)
-    tracked_hold_max_age: float = 30.0  # s: a hold tracked by the vertical velocity (an inertial velocity's
-    #                                     error integrates to centimetres in that time, e's wander to metres)
+    tracked_hold_max_age: float = 15.0  # s: a hold tracked by the vertical velocity (an autopilot's velocity
+    #                                     bias of ~0.02 m/s integrates to 0.3 m in that time; a crossing takes 2-5 s)
 
 
 def surfaces_at(x: float, y: float, footprints: Sequence[Sequence[float]], floor_heights: Sequence[float],
