@@ -200,15 +200,23 @@ def test_after_a_doorway_the_leg_goes_on_from_the_depth_reached_never_back_towar
     assert _not_behind((16.5, 11.0), (16.0, 11.2, 0.0, math.pi), math.pi) == pytest.approx((16.0, 11.0))
 
 
+def place(ugv, true_xy, yaw, inner, bias=(0.0, 0.0)):
+    """The test_passage UGV moved to true_xy heading yaw, its GNSS error bias, in the arena model's outer
+    walls plus the inner boxes (not shifted); returns the scene's parts."""
+    agent, ual, be, scene = ugv
+    ual.gnss_bias = np.array([bias[0], bias[1], 0.0])
+    ual.pos = np.array([true_xy[0], true_xy[1], 0.0])
+    ual.yaw = yaw
+    be.clock.sleep(3.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    scene.shift = (0.0, 0.0)
+    scene.boxes = wall_boxes(0.9) + inner
+    return agent, ual, be, scene
+
+
 def test_a_ugv_leg_with_a_blind_laser_holds_and_fails(ugv):
     """Every beam NaN (a laser that measures nothing): the leg does not start, the robot holds, the search
     fails saying so. Before: no return counted, the leg went on unchecked."""
-    agent, ual, be, scene = ugv
-    ual.pos = np.array([20.0, 14.0, 0.0])
-    ual.yaw = math.pi
-    be.clock.sleep(3.0)
-    scene.shift = (0.0, 0.0)
-    scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 19.3)]
+    agent, ual, be, scene = place(ugv, (20.0, 14.0), math.pi, [(17.7, 6.9, 17.9, 19.3)])
     scene.blind = True
     s = be.servers['search_indoor_action']
     s.send(SearchIndoorGoal(floor=0, path=[goal_pose(18.0, 14.0, 0.0, math.pi)]))
@@ -222,12 +230,7 @@ def test_realistic_108_a_ugv_turning_on_the_spot_does_not_follow_its_gnss_error(
     to face it and moved 0.4 m onto the doorway's edge: a go-to is under way in the GNSS frame during the
     turn (ual_sim: until it is done; the fake UAL: until the next command) and the UAL moves its true
     set-point by every change of the GNSS error meanwhile. Turns on the spot are yaw-rate commands now."""
-    agent, ual, be, scene = ugv
-    ual.pos = np.array([20.0, 11.0, 0.0])
-    ual.yaw = 0.0
-    be.clock.sleep(3.0)
-    scene.shift = (0.0, 0.0)
-    scene.boxes = wall_boxes(0.9)
+    agent, ual, be, scene = place(ugv, (20.0, 11.0), 0.0, [])
     state = {'stop': False}
 
     def drift():                                   # the GNSS error moves 0.15 m/s east, 4 s
@@ -250,12 +253,7 @@ def test_realistic_108_a_ugv_legs_set_points_stay_short_of_the_walls_its_laser_s
     doorway's edge only 0.67 m ahead, at 1 m/s to a set-point in the wall (a whole leg sent at once runs on
     between the checks of a loaded agent). Now no set-point is sent farther than 1 m ahead nor within the
     guard's stop distance of the wall the laser sees: wherever the agent stalls, the UGV stops short."""
-    agent, ual, be, scene = ugv
-    ual.pos = np.array([21.5, 14.0, 0.0])
-    ual.yaw = math.pi
-    be.clock.sleep(3.0)
-    scene.shift = (0.0, 0.0)
-    scene.boxes = wall_boxes(0.9) + [(17.7, 6.9, 17.9, 19.3)]   # no doorway
+    agent, ual, be, scene = place(ugv, (21.5, 14.0), math.pi, [(17.7, 6.9, 17.9, 19.3)])   # no doorway
     n = len(ual.waypoints)
     s = be.servers['search_indoor_action']
     s.send(SearchIndoorGoal(floor=0, path=[goal_pose(16.0, 14.0, 0.0, math.pi)]))
@@ -272,14 +270,8 @@ def test_realistic_108_a_waypoint_at_the_doorways_edge_is_passed_by_and_the_door
     1.1 m west of its GNSS place: the leg to it is held short of the wall, and the search goes on from there
     to the next waypoint, through the doorway its laser finds, clear of both edges. Before: the search
     failed at the blocked waypoint (and the UGV hit the edge when it was sent again)."""
-    agent, ual, be, scene = ugv
-    ual.gnss_bias = np.array([1.1, 0.6, 0.0])
-    ual.pos = np.array([21.1, 15.9, 0.0])                      # at (22.2, 16.5) by its GNSS
-    ual.yaw = math.pi
-    be.clock.sleep(3.0)
-    scene.shift = (0.0, 0.0)
     inner = [(17.7, 6.9, 17.9, 10.0), (17.7, 12.0, 17.9, 19.3)]
-    scene.boxes = wall_boxes(0.9) + inner
+    agent, ual, be, scene = place(ugv, (21.1, 15.9), math.pi, inner, bias=(1.1, 0.6))   # (22.2, 16.5) by GNSS
     closest = Closest(be, ual, inner)
     s = be.servers['search_indoor_action']
     # already inside, the UGV searches the path back from its nearest waypoint: (19.5, 11.0), then (16.5, 11.0)
