@@ -7,8 +7,9 @@ and two agent processes listen through the agents' own AgentInterface on a RosBa
   subscribed  - add_subscriber (the whole trial; before): rospy deserialises every frame, the interface
                 routes it to no one;
   on_demand   - add_demand (now): subscribed only while the task runs, so nothing between tasks.
-Prints each process's CPU seconds per simulated second (CPU / the sim-seconds of frames sent, 14 a sim-second) and the difference for the
-trial's 4 agents (3 UAVs + the UGV, one camera each). Writes bench/results/raw_thermal.json.
+Prints each process's CPU seconds per simulated second (CPU / the sim-seconds of frames sent, 14 a
+sim-second) and the difference for the trial's 4 agents (3 UAVs + the UGV, one camera each).
+Writes bench/results/raw_thermal.json.
 Usage: bench_raw_thermal.py [--seconds 30] [--rtf 8]
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ import tempfile
 import time
 
 from _common import SRC, load_averages, write_result
+from _node_cpu import process_stat
 
 TOPIC = '/mbzirc2020_1/teraranger_evo_thermal/raw_temp_array'
 CAMERA_HZ = 14.0          # the TeraRanger Evo Thermal 33's frame rate (its datasheet)
@@ -29,9 +31,7 @@ AGENTS = 4
 
 
 def cpu_seconds(pid: int) -> float:
-    with open(f'/proc/{pid}/stat', encoding='utf-8') as f:
-        fields = f.read().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+    return process_stat(pid)[1]
 
 
 def sent_count(path: str) -> tuple:
@@ -125,8 +125,9 @@ def main() -> int:
               'cpu_s_per_sim_s_per_agent': per_sim,
               'saved_cpu_s_per_sim_s_4_agents': round(AGENTS * (per_sim['subscribed'] - per_sim['on_demand']), 4),
               'load_average': load_averages()}
-    print(f"{rate:.0f} frames/s wall ({CAMERA_HZ * args.rtf:.0f} asked); per agent, CPU-s per sim-s between tasks: subscribed {per_sim['subscribed']:.4f}, "
-          f"on demand {per_sim['on_demand']:.4f}; the trial's {AGENTS} agents save "
+    print(f"{rate:.0f} frames/s wall ({CAMERA_HZ * args.rtf:.0f} asked); per agent, CPU-s per sim-s between "
+          f"tasks: subscribed {per_sim['subscribed']:.4f}, on demand {per_sim['on_demand']:.4f}; the trial's "
+          f"{AGENTS} agents save "
           f"{result['saved_cpu_s_per_sim_s_4_agents']:.4f} (load {result['load_average']})")
     write_result('raw_thermal', result)
     return 0

@@ -423,8 +423,9 @@ class ExtinguishIndoorFire(AgentTask):
         once the water stops (under the jet its surface may read cold), and counting under the jet cost
         ~1.6 L of a 2 L tank in missions (6 answers, 0.2 L/s, answers ~1.3 sim-s apart at 8x): a fire
         needing more than its nominal litre ran the tank dry after it was out and stayed active for a
-        top-up trip. The count costs time only (~3 s), so it stays at C.COLD_CHECKS. The heading stays on the hot spot the thermal camera sees (`_keep_aim`); turned off
-        it, the robot turns back where it stands. It is never driven back to the pose's GNSS position: a
+        top-up trip. The count costs time only (~3 s), so it stays at C.COLD_CHECKS.
+        The heading stays on the hot spot the thermal camera sees (`_keep_aim`); turned off it, the robot
+        turns back where it stands. It is never driven back to the pose's GNSS position: a
         robot holds its own set-point, and a drive to a GNSS position moves it by the drift of the GNSS
         error since (realistic seed 103: the UGV moved 0.37 m and its jet hit 0.5 m beside the hole).
         The one move it makes: backing off a wall its laser sees nearer than ~min_wall_clearance (a relative
@@ -532,8 +533,9 @@ class ExtinguishIndoorFire(AgentTask):
         why = [] if flowing else ['no water flowing (the tank level still)']
         off, turned = math.dist(pose[:3], here[:3]), abs(wrap_angle(here[3] - pose[3]))
         if not self._at(pose, here):
+            tolerance = math.degrees(self.agent.p.yaw_tolerance)
             why.append(f'{off:.2f} m (by its fix) and {math.degrees(turned):.1f} deg off the watering pose (at '
-                       f'most {WATERING_POSE_TOLERANCE} m for a UAV, {math.degrees(self.agent.p.yaw_tolerance):.1f} deg)')
+                       f'most {WATERING_POSE_TOLERANCE} m for a UAV, {tolerance:.1f} deg)')
         if not self.on_jet:
             why.append("the jet's height not on the hot spot yet")
         self.agent.backend.loginfo_throttle(2.0, f'[{self.name}] fire {fire_id} reads cold, not counted: '
