@@ -16,9 +16,12 @@ Rules:
   by `clearance` (the outer walls); the robot's own cell is allowed whatever its clearance (it is there);
 - a frontier cell is such a standable cell with an unknown 4-neighbour; frontier cells that touch form one
   frontier; one with fewer than `min_frontier` cells is noise (a single missed beam);
-- the next viewpoint is the standable cell of a frontier nearest to the robot along standable cells
-  (breadth-first over 8-neighbours); its path is cut into straight legs, each a line of standable cells
-  (`straight_legs`), so that every leg is one the leg guard checks;
+- the next viewpoint is a cell of a frontier at least `view_clearance` from every return when there is
+  one (a thermal camera near a wall sees a strip of it), else any, the cheapest along the cells at least
+  `pass_clearance` from every return (Dijkstra over 8-neighbours; a cell under `clearance` costs up to
+  NARROW_COST times more: a doorway between noisy jambs holds no cell 0.8 m clear on a 0.25 m grid, and
+  its passage is centred by the laser); its path is cut into straight legs, each a line of standable
+  cells or of the path's own (`straight_legs`), so that every leg is one the leg guard checks;
 - with a view range, standable cells farther than it from every point the robot looked from count as
   frontiers too: the laser sees a whole room from its door, the thermal camera a fire only nearer;
 - `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
@@ -27,8 +30,8 @@ Pure geometry here (no ROS); the task using it is tasks/explore.py.
 """
 from __future__ import annotations
 
+import heapq
 import math
-from collections import deque
 from typing import Iterable, Optional, Sequence
 
 import numpy as np
@@ -38,6 +41,7 @@ NEIGHBOURS_4 = ((1, 0), (-1, 0), (0, 1), (0, -1))
 NEIGHBOURS_8 = NEIGHBOURS_4 + ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
 Cell = tuple[int, int]
+NARROW_COST = 4.0   # extra cost factor of a path cell with only pass_clearance (next_viewpoint)
 
 
 class FloorGrid:
@@ -86,21 +90,20 @@ class FloorGrid:
             self.cells[c] = OCCUPIED
 
     # ---- where the robot may stand ---------------------------------------------------------------------
-    def standable(self, clearance: float, here: Optional[Cell] = None) -> np.ndarray:
-        """Boolean grid of the free cells at least clearance from every occupied cell and from the outline."""
-        ok = self.cells == FREE
-        occ = np.argwhere(self.cells == OCCUPIED)
+    def clearance(self) -> np.ndarray:
+        """m from each cell's centre to the nearest occupied cell's centre and to the outline (inf: none)."""
         ii, jj = np.meshgrid(np.arange(self.nx), np.arange(self.ny), indexing='ij')
-        if len(occ):
-            r = clearance / self.res
-            near = np.zeros_like(ok)
-            for oi, oj in occ:
-                near |= (ii - oi) ** 2 + (jj - oj) ** 2 < r * r
-            ok &= ~near
-        margin = int(math.ceil(clearance / self.res - 0.5))
-        if margin > 0:
-            ok[:margin, :] = ok[-margin:, :] = False
-            ok[:, :margin] = ok[:, -margin:] = False
+        to_outline = np.minimum(np.minimum(ii + 0.5, self.nx - ii - 0.5), np.minimum(jj + 0.5, self.ny - jj - 0.5))
+        d2 = np.full((self.nx, self.ny), np.inf)
+        for oi, oj in np.argwhere(self.cells == OCCUPIED):
+            np.minimum(d2, (ii - oi) ** 2 + (jj - oj) ** 2, out=d2)
+        return np.minimum(np.sqrt(d2), to_outline) * self.res
+
+    def standable(self, clearance: float, here: Optional[Cell] = None, clear: Optional[np.ndarray] = None) -> np.ndarray:
+        """Boolean grid of the free cells at least clearance from every occupied cell and from the outline
+        (`clear`: the grid's clearance() when the caller has it)."""
+        clear = self.clearance() if clear is None else clear
+        ok = (self.cells == FREE) & (clear >= clearance - 1e-9)
         if here is not None:
             ok[here] = True
         return ok
@@ -147,30 +150,35 @@ def frontiers(grid: FloorGrid, ok: np.ndarray, min_frontier: int) -> list[set]:
     return groups
 
 
-def paths_from(ok: np.ndarray, start: Cell) -> dict:
-    """Breadth-first parents over standable cells (8-neighbours) from start."""
-    parent = {start: None}
-    queue = deque([start])
+def paths_from(ok: np.ndarray, start: Cell, cost: Optional[np.ndarray] = None) -> tuple[dict, dict]:
+    """Cheapest paths over standable cells (8-neighbours) from start: (parents, costs). A step costs its
+    length times `cost` of the cell it enters (1 without)."""
+    parent, best = {start: None}, {start: 0.0}
+    heap = [(0.0, start)]
     nx, ny = ok.shape
-    while queue:
-        i, j = queue.popleft()
+    while heap:
+        d, (i, j) = heapq.heappop(heap)
+        if d > best[(i, j)]:
+            continue
         for di, dj in NEIGHBOURS_8:
             c = (i + di, j + dj)
-            if 0 <= c[0] < nx and 0 <= c[1] < ny and ok[c] and c not in parent:
-                parent[c] = (i, j)
-                queue.append(c)
-    return parent
+            if 0 <= c[0] < nx and 0 <= c[1] < ny and ok[c]:
+                nd = d + math.hypot(di, dj) * (1.0 if cost is None else float(cost[c]))
+                if nd < best.get(c, math.inf):
+                    best[c], parent[c] = nd, (i, j)
+                    heapq.heappush(heap, (nd, c))
+    return parent, best
 
 
-def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list) -> list:
-    """The cell path cut into the fewest straight legs (greedy: each leg goes as far as a free line does)."""
+def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list, ends: Optional[np.ndarray] = None) -> list:
+    """The cell path cut into the fewest straight legs (greedy: each leg goes as far as a free line does,
+    ending on an `ends` cell when one is that far: a leg ending in a doorway leaves the robot between
+    its jambs, where the leg guard holds the next leg)."""
     legs, k = [], 0
     while k < len(cells) - 1:
-        far = k + 1
-        for m in range(len(cells) - 1, k, -1):
-            if grid.line_free(ok, cells[k], cells[m]):
-                far = m
-                break
+        reach = [m for m in range(len(cells) - 1, k, -1) if grid.line_free(ok, cells[k], cells[m])]
+        good = [m for m in reach if ends is None or m == len(cells) - 1 or ends[cells[m]]]
+        far = good[0] if good else reach[0] if reach else k + 1
         legs.append(cells[far])
         k = far
     return legs
@@ -178,33 +186,44 @@ def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list) -> list:
 
 def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min_frontier: int = 3,
                    skip: Iterable = (), sight_of: Optional[Sequence[float]] = None,
-                   viewed: Sequence = (), view_range: float = 0.0) -> Optional[list]:
-    """The legs [(x, y), ...] to the nearest frontier's nearest standable cell (along the free space), or
-    None when no frontier is reachable. skip: (x, y) points neither to choose nor to pass (a blocked leg's end);
-    sight_of: only cells in a straight standable line of this point count; viewed, view_range > 0: a
-    standable cell farther than view_range from every viewed point (x, y) counts as a frontier too (seen
-    by the laser, not yet near enough for the thermal camera)."""
+                   viewed: Sequence = (), view_range: float = 0.0, pass_clearance: Optional[float] = None,
+                   view_clearance: float = 0.0) -> Optional[list]:
+    """The legs [(x, y), ...] to the next viewpoint, or None when no frontier is reachable.
+
+    The viewpoint is a frontier's cell (or, with viewed and view_range > 0, a standable cell farther than
+    view_range from every viewed point (x, y): seen by the laser, not yet near enough for the thermal
+    camera), preferring cells at least view_clearance from every return (a camera near a wall sees a strip
+    of it), then the cheapest along the free space. Paths keep `clearance` where they can and
+    `pass_clearance` (default: clearance) at least: a doorway 2 m wide holds no cell 0.8 m clear of the
+    noisy returns of its jambs on a 0.25 m grid, and its passage is centred by the laser; a narrow cell
+    costs up to NARROW_COST times more, and a leg is a straight line of clear cells or of the path's own.
+    skip: (x, y) points neither to choose nor to pass (a blocked leg's end); sight_of: only cells in a
+    straight line of clear cells from this point count."""
     start = grid.cell(here[0], here[1])
     if start is None:
         return None
-    ok = grid.standable(clearance, here=start)
+    clear = grid.clearance()
+    narrow = clearance if pass_clearance is None else min(pass_clearance, clearance)
+    ok = grid.standable(clearance, here=start, clear=clear)
+    passable = grid.standable(narrow, here=start, clear=clear)
     origin = grid.cell(sight_of[0], sight_of[1]) if sight_of is not None else None
     banned = {grid.cell(p[0], p[1]) for p in skip} - {None, start}
     for c in banned:             # neither a target nor a cell to pass: a leg to it was found blocked
-        ok[c] = False
-    parent = paths_from(ok, start)
-    best = None
-    targets = [c for group in frontiers(grid, ok, min_frontier) for c in group]
+        ok[c] = passable[c] = False
+    cost = 1.0 + NARROW_COST * np.clip((clearance - clear) / max(clearance - narrow, 1e-6), 0.0, 1.0)
+    parent, costs = paths_from(passable, start, cost)
+    targets = [c for group in frontiers(grid, passable, min_frontier) for c in group]
     if view_range > 0:
-        targets += unviewed(grid, ok, viewed, view_range)
+        targets += unviewed(grid, passable, viewed, view_range)
+    best = None
     for c in set(targets):
         if c not in parent or c in banned or c == start:
             continue
         if origin is not None and not (ok[origin] and grid.line_free(ok, origin, c)):
             continue
-        d = _path_length(parent, c)
-        if best is None or d < best[0]:
-            best = (d, c)
+        rank = (clear[c] < view_clearance, costs[c])
+        if best is None or rank < best[0]:
+            best = (rank, c)
     if best is None:
         return None
     cells, c = [], best[1]
@@ -212,7 +231,10 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
         cells.append(c)
         c = parent[c]
     cells.reverse()
-    return [grid.centre(c) for c in straight_legs(grid, ok, cells)]
+    on_path = ok.copy()
+    for i, j in cells:           # a leg may pass narrow cells only beside the path's own
+        on_path[max(0, i - 1):i + 2, max(0, j - 1):j + 2] |= passable[max(0, i - 1):i + 2, max(0, j - 1):j + 2]
+    return [grid.centre(c) for c in straight_legs(grid, on_path, cells, ends=ok)]
 
 
 def unviewed(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: float) -> list:
@@ -223,15 +245,6 @@ def unviewed(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: floa
     for v in viewed:
         far &= (xs - v[0]) ** 2 + (ys - v[1]) ** 2 > view_range ** 2
     return [(int(i), int(j)) for i, j in np.argwhere(far)]
-
-
-def _path_length(parent: dict, c: Cell) -> float:
-    d = 0.0
-    while parent[c] is not None:
-        p = parent[c]
-        d += math.hypot(c[0] - p[0], c[1] - p[1])
-        c = p
-    return d
 
 
 __all__ = ['FloorGrid', 'frontiers', 'next_viewpoint', 'straight_legs', 'UNKNOWN', 'FREE', 'OCCUPIED']

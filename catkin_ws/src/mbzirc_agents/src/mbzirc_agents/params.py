@@ -191,10 +191,15 @@ class AgentParams:
                                 'space (tasks/explore.py; UGV: the door only, no ~indoor_search_path)',
                                 choices=('plan', 'explore'))
     explore_budget: float = _param(300.0, 's at most of exploring a floor, after the path')
-    explore_headings: int = _param(6, 'headings of a look around on the spot while exploring (thermal camera)')
+    explore_headings: int = _param(0, 'headings of a look around on the spot while exploring (thermal camera); 0: '
+                                   'enough for ~forward_camera_fov to cover the whole turn')
     explore_look_time: float = _param(1.5, 's of thermal look at each heading (the frame filter needs > 1 s)')
     explore_clearance: float = _param(0.8, 'm from every laser return and the outline a viewpoint and its legs '
                                       'keep')
+    explore_pass_clearance: float = _param(0.6, 'm from every laser return a leg keeps at least where it cannot keep '
+                                           '~explore_clearance (a doorway: its passage is centred by the laser)')
+    explore_view_clearance: float = _param(2.0, 'm from every laser return a viewpoint keeps when one can: a thermal '
+                                           'camera (~forward_camera_fov) near a wall sees only a strip of it')
     explore_view_range: float = _param(3.5, 'm: free space farther than this from every look-around is a viewpoint '
                                        'to go to (the thermal camera sees fires nearer than the laser sees walls)')
     explore_resolution: float = _param(0.25, 'm, cell side of the exploration grid')
