@@ -565,6 +565,28 @@ def test_a_full_tank_puts_out_a_fire_needing_up_to_1_3_nominal_and_confirms_it_w
     assert sc.ual.water > 0.05, f'{sc.ual.water:.2f} L left: the tank ran dry on it'
 
 
+def test_realistic_103_a_uav_beside_a_wall_backs_off_it_before_its_approach(scenes):
+    """Realistic seed 103: two UAVs that a search left 0.3 m from a wall beside them (their GNSS fix 1.3 m off)
+    hit it on the approach's first leg. Now the robot first backs off walls nearer than ~min_wall_clearance
+    by its laser: along the approach it stays clear of the wall beside it. Before: the approach's leg started
+    0.3 m from it (here the leg guard then held the leg, 'a laser return 0.00 m ahead': no water for the fire;
+    in the mission the UAVs hit the wall)."""
+    from laser_world import LaserScene
+    sc = scenes(hot_until=2.0)
+    laser = LaserScene(sc.be, sc.ual, noisy=False)
+    laser.boxes = [(-5.0, 0.3, 10.0, 0.5), (4.05, -5.0, 4.25, 5.0)]     # a wall 0.3 m to the left, the fire's
+    sc.threads = (laser,)
+    sc.be.clock.sleep(0.5)                                               # its first scans
+    track = []
+    sc.be.clock.start_thread(lambda: [track.append(tuple(sc.ual.pos)) or sc.be.clock.sleep(0.05)
+                                      for _ in range(600)], name='track')
+    sc.extinguish(timeout=60)
+    moved = [p for p in track if p[0] > 0.5]
+    assert moved, 'the UAV never moved towards the fire'
+    nearest = min(0.3 - p[1] for p in moved)
+    assert nearest >= 0.7, f'{nearest:.2f} m from the wall beside it on the approach'
+
+
 class UgvScene(Scene):
     """The UGV at its watering pose, 1.5 m from a ground-floor fire, facing it; the thermal camera scripted."""
 

@@ -193,9 +193,9 @@ class ExtinguishIndoorFire(AgentTask):
     """Face the fire at ~indoor_fire_distance (from the side the robot is on), turn until the thermal hot
     spot is straight ahead, and pump until cold.
 
-    Walls (wall_clearance.py, ~wall_clearance): the approach stops at ~indoor_fire_distance from the wall its
-    laser sees ahead, and while the robot checks, aims and pumps it backs off any wall nearer than
-    ~min_wall_clearance. Why: the watering pose is placed on the fire's GNSS-frame estimate and held on the
+    Walls (wall_clearance.py, ~wall_clearance): before the approach the robot backs off any wall nearer than
+    ~min_wall_clearance, the approach stops at ~indoor_fire_distance from the wall its laser sees ahead, and
+    while the robot checks and pumps it backs off any wall nearer than ~min_wall_clearance. Why: the watering pose is placed on the fire's GNSS-frame estimate and held on the
     robot's own drifting GNSS fix (realistic seeds 104, 106: a UAV holding its watering pose on floor 2 hit
     the interior wall the fire is on).
 
@@ -270,6 +270,20 @@ class ExtinguishIndoorFire(AgentTask):
         a.backend.loginfo_throttle(2.0, f'[{self.name}] a wall nearer than {a.p.min_wall_clearance:.2f} m by '
                                         f'the laser: backing off {math.hypot(off[0], off[1]):.2f} m')
         return to
+
+    def _clear_of_walls_first(self) -> None:
+        """Before the approach: back off any wall the laser sees nearer than ~min_wall_clearance, and wait (up
+        to AIM_TURN_TIME s) until the robot is there. Why (realistic seed 103): two UAVs that a search left
+        0.3 m from facade B's inside face (their GNSS fix 1.3 m off) hit it on the first leg of the approach;
+        the wall beside them also read as the wall "ahead" of the leg (`_laser_standoff`), which put the
+        watering pose 2.2 m short, behind them, along that wall."""
+        a = self.agent
+        to = self._keep_off_walls(a.position()[3])
+        if to is None:
+            return
+        end = a.backend.now() + AIM_TURN_TIME
+        while a.backend.now() < end and math.dist(a.position()[:2], to[:2]) > WATERING_POSE_TOLERANCE / 2:
+            self.sleep(0.1)
 
     def _sighted(self, since: float, wait: float) -> Optional[Sighting]:
         """The thermal camera's fire in a detection whose image was taken after `since`, waiting up to `wait`
@@ -379,6 +393,7 @@ class ExtinguishIndoorFire(AgentTask):
         self.sensed.clear()                              # a previous run's detections aim nothing
         self.contrast.clear()                            # nor its locked fire
         self.aim_z, self.watering_z, self.on_jet = None, None, True
+        self._clear_of_walls_first()
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
