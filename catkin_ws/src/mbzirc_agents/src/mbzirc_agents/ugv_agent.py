@@ -27,10 +27,7 @@ UGV_DEFAULTS = {'use_regions': False, 'building_clearance': 1.2, 'max_speed': 1.
                 'opening_keep_off': 0.9, 'frame_radius': 0.6,   # its 0.6 m radius in the 2.5 m door
                 'leg_guard_half_width': 0.9, 'leg_guard_stop_distance': 1.1,   # the same radius + margins
                 'wall_clearance': False,   # parked, it does not drift; a back-off aside is a manoeuvre for it
-                'explore_in_sight': False,  # it explores the whole ground floor through its doorways
-                # frontiers only: viewpoints for nearness (3.5 m) fell in its doorways, where its 0.9 m leg
-                # guard holds it (a UGV search of another floor plan, test_explore_search)
-                'explore_view_range': 0.0}
+                'explore_in_sight': False}  # it explores the whole ground floor through its doorways
 
 
 TURN_GAIN, TURN_MAX_RATE, TURN_MIN_RATE = 1.5, 0.8, 0.1   # 1/s, rad/s, rad/s: turning on the spot

@@ -141,6 +141,8 @@ def test_a_doorway_between_noisy_jambs_is_passed_at_the_pass_clearance():
     _, visited = explore(walls, (14.25, 7.8), noisy=True, view_range=3.5, pass_clearance=0.6)
     assert seen(visited, east_fire, walls), visited
     assert any(v[0] > 17.9 for v in visited), visited
+    # no leg ends between the jambs (the leg guard holds the next leg there): every leg end keeps 0.8 m
+    assert min(wall_distance(v, walls) for v in visited[1:]) >= 0.75, visited
 
 
 def first_viewpoints(walls, start, n, **kw):

@@ -106,6 +106,20 @@ def test_the_planned_path_of_the_default_floor_plan_does_not_find_it(scene):
     assert not (outcome == 'succeeded' and list(s.result.fire_ids) == [7]), s.result.message
 
 
+@pytest.mark.parametrize('scene', [('explore', DEFAULT_INNER, DEFAULT_EAST_FIRE, True)], indirect=True)
+def test_the_ugv_explores_the_default_floor_plan_with_a_noisy_laser_to_the_east_room(scene):
+    """Realistic seed 104 with exploration: the UGV saw its room whole from two looks and found no frontier
+    left (the doorway to the east room, 2 m wide in a 0.2 m wall, held no cell 0.8 m clear of the noisy
+    returns of its jambs); and in the east room, seen whole by the laser from its doorway, a UGV exploring
+    frontiers only never came within the thermal camera's range of the fire: it burned the whole trial."""
+    agent, ual, be, state = scene
+    s, outcome = search(be)
+    assert outcome == 'succeeded', (s.result.message, state['trace'])
+    assert list(s.result.fire_ids) == [7], (s.result.message, state['trace'])
+    assert ual.pos[0] > 17.9                                      # in the east room
+    assert state['nearest'] > 0.6, state['nearest']
+
+
 DEFAULT_WEST_FIRE_1 = (17.65, 8.5, 6.5)     # the default world's west fire on floor 1 (test-only)
 HALF_FOV_CAMERA = math.radians(16.5)        # the thermal camera's 33 deg, both ways
 
