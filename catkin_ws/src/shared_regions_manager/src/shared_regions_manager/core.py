@@ -200,7 +200,8 @@ class RegionManager:
             self._refused = {k: r for k, r in self._refused.items() if now - r.last <= self.waiting_fresh_s}
             cycle = find_cycle(waits)
             if cycle is None:
-                orders = [o for o in idle_holder_order(waits, waited, self.idle_yield_after_s) if self.is_known(o.victim)]
+                orders = [o for o in idle_holder_order(waits, waited, self.idle_yield_after_s)
+                          if self.is_known(o.victim)]
                 return self._issue(orders, now)
             self._turns = {pair: v for pair, v in self._turns.items() if now - v[1] < 3.0 * self.yield_retry_s}
             orders = sorted(yield_candidates(cycle, self.priority),     # stable: priority among equals

@@ -48,7 +48,7 @@ class YieldOrder:
     box: Box
     victim_labels: Tuple[str, ...]            # the victim's boxes that overlap it
     cycle: Tuple[Wait, ...]
-    idle_for: float = 0.0                     # > 0: no cycle; the winner waited this long for a victim that waits for nothing
+    idle_for: float = 0.0      # > 0: no cycle, the winner waited this long for a victim waiting for nothing
 
     def describe(self) -> str:
         """The cycle (or the long wait for an idle holder) and the order in words (the manager's log line)."""
