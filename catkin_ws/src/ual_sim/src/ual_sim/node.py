@@ -103,6 +103,7 @@ class RobotIO:
 
     def __init__(self, node: "SimNode", r: Robot, k: int):
         self.node, self.r, self.rid = node, r, r.id
+        self.pending_velocity: Optional[tuple] = None    # (v, frame_id) of the last set_velocity not yet applied
         ns = C.robot_ns(r.id)
         self.ns = ns
         self.frame = f"{ns}/base_link"
@@ -181,6 +182,7 @@ class RobotIO:
     def _command(self, what: str, fn: Callable[[], tuple[bool, str]], blocking: bool) -> bool:
         if not self._comm(what):
             return False
+        self.pending_velocity = None          # a velocity received before this command is older than it
         with self.node.sim.lock:
             ok, msg = fn()
         if not ok:
@@ -232,15 +234,28 @@ class RobotIO:
         return TriggerResponse(ok, msg)
 
     def on_set_velocity(self, msg: TwistStamped) -> None:
+        """Kept for the sim loop's next tick (apply_velocity), not applied here under sim.lock. Why: while the
+        sim runs behind its real-time factor its loop re-takes the lock at once after each tick, and this
+        callback's thread can wait for it long (a stand-alone model of that loop on a loaded machine: up to
+        0.22 s of wall time, 1-2 s of sim time at 4-8x): the velocity command times out (VELOCITY_CMD_TIMEOUT)
+        and the robot falls back to its position hold, which follows the GNSS error, although the commands
+        come 7 times a second (realistic seed 101 at RTF 4: a UAV in a window's wall held its GNSS position for
+        3 s, true y still, while its recorded commands, on time, said 0.8 m/s forward)."""
         if not self._comm("set_velocity"):
             return
         lin, ang = msg.twist.linear, msg.twist.angular
-        v = np.array([lin.x, lin.y, lin.z, ang.z], dtype=float)
-        with self.node.sim.lock:
-            if msg.header.frame_id.endswith("base_link"):
-                c, s = math.cos(self.r.yaw), math.sin(self.r.yaw)
-                v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
-            ok, err = self.r.set_velocity(v, self.node.sim.time)
+        self.pending_velocity = (np.array([lin.x, lin.y, lin.z, ang.z], dtype=float), msg.header.frame_id)
+
+    def apply_velocity(self) -> None:
+        """The last set_velocity received since the previous tick, if any (the sim loop, under sim.lock)."""
+        pending, self.pending_velocity = self.pending_velocity, None
+        if pending is None:
+            return
+        v, frame_id = pending
+        if frame_id.endswith("base_link"):
+            c, s = math.cos(self.r.yaw), math.sin(self.r.yaw)
+            v[0], v[1] = c * v[0] - s * v[1], s * v[0] + c * v[1]
+        ok, err = self.r.set_velocity(v, self.node.sim.time)
         if not ok:
             logerr_throttled(self.ns + "vel", 1.0, f"[ual_sim] {self.ns} set_velocity: {err}")
 
@@ -554,6 +569,8 @@ class SimNode:
         self.pub_clock.publish(Clock(rospy.Time(0)))
         while not rospy.is_shutdown():
             with self.sim.lock:
+                for io in self.io.values():
+                    io.apply_velocity()
                 self.sim.step(dt)
                 now = self.sim.time
                 stamp = rospy.Time.from_sec(now)
