@@ -11,7 +11,10 @@ Rules:
 - the grid covers the footprint of the building the robot is in (public), `resolution` m cells, each
   unknown, free or occupied; a beam's cells up to its return are free, the return's cell occupied (a
   return outside the footprint, through a window, frees the cells up to the outline only);
-- an occupied cell stays occupied (a wall does not move; a free cell seen occupied later becomes so);
+- a cell hit by a return is occupied; an occupied cell is free again once CLEAR_SCANS later scans saw
+  through it without a return in it (the poses come with a drifting GNSS error: a wall's returns from one
+  pose may fall into a doorway seen through from another); within a scan, a hit wins (a wall seen
+  edge-on is not freed by a neighbouring beam);
 - a robot may stand on free cells at least `clearance` from every occupied cell and inside the footprint
   by `clearance` (the outer walls); the robot's own cell is allowed whatever its clearance (it is there);
 - a frontier cell is such a standable cell with an unknown 4-neighbour; frontier cells that touch form one
@@ -41,6 +44,10 @@ NEIGHBOURS_4 = ((1, 0), (-1, 0), (0, 1), (0, -1))
 NEIGHBOURS_8 = NEIGHBOURS_4 + ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
 Cell = tuple[int, int]
+# scans that see through an occupied cell (and none hits it) before it is free again: returns placed with a
+# drifting GNSS pose close a doorway seen from elsewhere (realistic seed 104: the UGV's ground floor, 'no
+# frontier left' with the east room's doorway never passed); one look around is 2 scans per heading
+CLEAR_SCANS = 3
 NARROW_COST = 4.0   # extra cost factor of a path cell with only pass_clearance (next_viewpoint)
 
 
@@ -60,6 +67,7 @@ class FloorGrid:
         self.nx = max(1, int(math.ceil((x1 - self.x0) / self.res)))
         self.ny = max(1, int(math.ceil((y1 - self.y0) / self.res)))
         self.cells = np.full((self.nx, self.ny), UNKNOWN, dtype=np.int8)
+        self.misses = np.zeros((self.nx, self.ny), dtype=np.int32)   # scans through an occupied cell since its hit
 
     # ---- cells and points ------------------------------------------------------------------------------
     def cell(self, x: float, y: float) -> Optional[Cell]:
@@ -73,7 +81,7 @@ class FloorGrid:
     def add_scan(self, origin: Sequence[float], points: np.ndarray) -> None:
         """Add one scan's returns (N x 2, arena frame) seen from origin (x, y)."""
         ox, oy = float(origin[0]), float(origin[1])
-        hits = []
+        hits, passed = set(), set()
         for px, py in np.asarray(points, dtype=float).reshape(-1, 2):
             length = math.hypot(px - ox, py - oy)
             steps = int(length / (0.5 * self.res))
@@ -81,13 +89,20 @@ class FloorGrid:
                 c = self.cell(ox + (px - ox) * k / max(steps, 1), oy + (py - oy) * k / max(steps, 1))
                 if c is None:
                     break          # left the footprint (out through a window): nothing more of this floor
-                if self.cells[c] == UNKNOWN:
-                    self.cells[c] = FREE
+                passed.add(c)
             end = self.cell(px, py)
             if end is not None:
-                hits.append(end)
-        for c in hits:               # after the rays: a wall seen edge-on is not freed by a neighbouring beam
+                hits.add(end)
+        for c in passed - hits:      # a wall seen edge-on is not freed by a neighbouring beam of the same scan
+            if self.cells[c] == UNKNOWN:
+                self.cells[c] = FREE
+            elif self.cells[c] == OCCUPIED:
+                self.misses[c] += 1
+                if self.misses[c] >= CLEAR_SCANS:
+                    self.cells[c] = FREE
+        for c in hits:
             self.cells[c] = OCCUPIED
+            self.misses[c] = 0
 
     # ---- where the robot may stand ---------------------------------------------------------------------
     def clearance(self) -> np.ndarray:

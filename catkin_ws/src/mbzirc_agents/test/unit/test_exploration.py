@@ -136,13 +136,12 @@ def test_a_doorway_between_noisy_jambs_is_passed_at_the_pass_clearance():
     clearance (the doorway's passage is centred by the laser) and still keep 0.8 m elsewhere."""
     walls = outer_walls() + PLAN_A
     east_fire = (18.1, 16.5)
-    _, stuck = explore(walls, (14.25, 7.8), noisy=True, view_range=3.5)
-    assert all(v[0] < 17.7 for v in stuck), stuck                      # the noisy doorway, without
     _, visited = explore(walls, (14.25, 7.8), noisy=True, view_range=3.5, pass_clearance=0.6)
     assert seen(visited, east_fire, walls), visited
     assert any(v[0] > 17.9 for v in visited), visited
-    # no leg ends between the jambs (the leg guard holds the next leg there): every leg end keeps 0.8 m
-    assert min(wall_distance(v, walls) for v in visited[1:]) >= 0.75, visited
+    # every leg end keeps more than the UGV's 0.6 m radius from the walls (cell centres 0.8 m from the
+    # jambs' cells may lie 0.7 m from the jambs: a leg may end in the doorway's middle)
+    assert min(wall_distance(v, walls) for v in visited[1:]) >= 0.7, visited
 
 
 def first_viewpoints(walls, start, n, **kw):
@@ -170,3 +169,23 @@ def test_viewpoints_keep_the_view_clearance_from_the_walls_where_the_room_allows
     assert min(wall_distance(v, walls) for v in near) < 1.5, near
     views = first_viewpoints(walls, (14.25, 7.8), 4, view_clearance=2.0)
     assert len(views) == 4 and min(wall_distance(v, walls) for v in views) >= 1.8, views
+
+
+def test_a_doorway_closed_by_returns_placed_with_a_drifted_pose_opens_again():
+    """Realistic seed 104 (exploration, ground floor): the UGV's returns are placed with its GNSS pose, whose
+    error drifts between looks; a look whose pose was off put the doorway's jamb into the doorway, the
+    cells stayed occupied ('an occupied cell stays occupied') and the east room was never reached ('no
+    frontier left'). Scans that see through such a cell free it again (not a single beam: noise)."""
+    walls = outer_walls() + PLAN_A
+    drifted = [(x0, y0 - 0.8, x1, y1 - 0.8) for x0, y0, x1, y1 in walls]   # the pose 0.8 m north of the truth
+    grid = FloorGrid(OUTLINE, 0.25)
+    here, in_doorway = (15.0, 11.0), (17.8, 11.4)
+    grid.add_scan(here, scan_points(here, drifted))
+    assert grid.cells[grid.cell(*in_doorway)] == OCCUPIED
+    grid.add_scan(here, scan_points(here, walls))
+    assert grid.cells[grid.cell(*in_doorway)] == OCCUPIED              # one scan through it: not yet
+    for _ in range(2):
+        grid.add_scan(here, scan_points(here, walls))
+    assert grid.cells[grid.cell(*in_doorway)] == FREE
+    assert next_viewpoint(grid, here, 0.8, 3, pass_clearance=0.6) is not None
+    assert grid.cells[grid.cell(17.8, 12.6)] == OCCUPIED                # the true jamb stays
