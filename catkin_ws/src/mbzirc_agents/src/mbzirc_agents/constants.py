@@ -73,9 +73,10 @@ FACADE_STANDOFF = 2.0           # m in front of a facade fire holder
 POSE_HISTORY_LEN = 200          # poses kept for pose_at (several seconds at the UAL's 30-50 Hz)
 HOLE_JUMP_MAX = 1.5             # m: a hole position further than this from the locked one -> abort
 HOLE_SAME_MAX = 0.35            # m: a circle this close to the locked hole is that hole (decoys: 0.7 m aside)
-COLD_CHECKS = 6                 # consecutive "no fire" CheckFire answers (0.5 s apart) -> fire is out; the
-#                                 water keeps flowing meanwhile: a nearly quenched heater reads cold while its
-#                                 container still misses some 8 % (seen: fires left at 92-96 % after 3 checks)
+COLD_CHECKS = 6                 # consecutive cold answers (0.5 s apart) -> fire is out. Facade: the jet stays
+#                                 on the hole meanwhile (a nearly quenched heater reads cold while its container
+#                                 still misses some 8 %: fires left at 92-96 % after 3 checks). Indoors the soak
+#                                 gives that margin and the pump is off while they are counted (tasks/indoor.py)
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)
 
