@@ -279,8 +279,7 @@ class RobotIO:
         tf = None
         if self.due_pose(now):
             x, y, z, yaw = sim.reported_pose(r)
-            vel = sim.reported_velocity(r) if (self.pub_vel.get_num_connections()
-                                               or self.pub_odom.get_num_connections()) else None
+            vel = sim.reported_velocity(r)    # always: a subscriber may connect between two checks below
             q = yaw_quat(yaw)
             if self.pub_pose.get_num_connections():
                 m = self.m_pose
