@@ -32,3 +32,16 @@ def publish(backend, frame):
     cb = backend.subs.get(TOPIC)
     if cb is not None:
         cb(message(frame))
+
+
+def ring_frame(contrast, centre, outer=20.0, hole=6.5, hole_share=0.4, wall=35.0, noise=0.5, rng=None):
+    """A fire holder seen from near (32, 32): a ring of flames `contrast` deg C over the wall out to `outer` px
+    from `centre` (row, column), wider than the frame when outer > 16, around a hole of `hole` px radius that
+    reads hole_share of the ring's rise (a heater in it): the view of a holder from its watering distance."""
+    rows, cols = np.mgrid[0:SIZE, 0:SIZE]
+    r = np.hypot(rows - centre[0], cols - centre[1])
+    level = np.where(r <= hole, hole_share, np.where(r <= outer, 1.0, 0.0))
+    frame = wall + contrast * level
+    if noise > 0.0:
+        frame = frame + (rng or np.random.default_rng()).normal(0.0, noise, frame.shape)
+    return frame

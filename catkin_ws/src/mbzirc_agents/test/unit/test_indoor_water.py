@@ -15,6 +15,14 @@ from mbzirc_agents import constants as C
 
 
 FIRE = (4.0, 0.0, 6.5)      # the fire (track and truth); the UAV waters it from 1.5 m, at (2.5, 0, 6.5) facing +x
+FOCAL = 16.0 / math.tan(math.radians(33.0) / 2.0)   # px: the 32 px wide, 33 deg thermal camera
+
+
+def frame_at(contrast, bearing, rise_angle, rng):
+    """A raw frame (fake_thermal.fire_frame) with the fire's centre `bearing` rad left of the optical axis and
+    `rise_angle` rad above it: what the camera shows of a fire its detection puts there."""
+    return fake_thermal.fire_frame(contrast, rng=rng, centre=(15.5 - FOCAL * math.tan(rise_angle),
+                                                              15.5 - FOCAL * math.tan(bearing)))
 
 
 class Scene:
@@ -228,6 +236,8 @@ def test_hot_before_turning_to_the_hot_spot_but_not_after_is_not_out(scenes):
         sc.be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
         return CheckFireResponse(fire_detected=abs(sc.ual.yaw - yaw0[0]) < 0.05)
     sc.be.handlers['thermal_detection/fire_detected'] = answer
+    rng = np.random.default_rng(2)           # the raw image shows the fire where the detection says
+    sc.ual.thermal = lambda: frame_at(60.0, 0.3 - (sc.ual.yaw - yaw0[0] if yaw0 else 0.0), 0.0, rng)
     s = sc.extinguish()
     assert s.status == 'aborted' and 'not seen hot from the watering pose' in s.result.message, s.result.message
     assert sc.statuses == []
@@ -273,6 +283,9 @@ def test_the_robot_turns_to_the_hot_spot_before_pumping(scenes):
         sc.be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
         return CheckFireResponse(fire_detected=sc.hot())
     sc.be.handlers['thermal_detection/fire_detected'] = answer
+    rng = np.random.default_rng(2)           # the raw image shows the fire where the detection says
+    sc.ual.thermal = lambda: frame_at(60.0 if sc.hot() else 0.0, 0.3 - (sc.ual.yaw - yaw0[0] if yaw0 else 0.0),
+                                      0.0, rng)
     s = sc.extinguish()
     assert s.status == 'succeeded', s.result.message
     assert sc.ual.yaw == pytest.approx(yaw0[0] + 0.3, abs=0.05)
@@ -285,6 +298,8 @@ class ForwardCamera:
 
     def __init__(self, sc, scale=0.7):
         self.sc, self.scale, self.stop = sc, scale, False
+        rng = np.random.default_rng(2)      # the raw image: the fire where it is (its centre, the hole)
+        sc.ual.thermal = lambda: frame_at(60.0 if sc.hot() else 0.0, self.true_bearing()[0], 0.0, rng)
         sc.be.clock.start_thread(self._loop, name='forward camera')
 
     def true_bearing(self):
@@ -368,9 +383,14 @@ class LevelCamera:
     jet's true spot within `hit` m of the hole's centre (a 0.15 m hole, a spot of ~0.1 m), and the camera reads
     the fire hot while it is in the image and has had less than `need` s of water."""
 
+    scale = 1.0         # the detector's reading of the fire's offset from the image centre, x the true one
+
     def __init__(self, sc, need=1.0, hit=0.08):
         self.sc, self.need, self.hit, self.received, self.stop = sc, need, hit, 0.0, False
         sc.hot = self.hot
+        rng = np.random.default_rng(2)      # the raw image: the fire where the detections put it
+
+        sc.ual.thermal = lambda: self.frame(rng)
         sc.be.clock.start_thread(self._loop, name='level camera')
 
     def view(self):
@@ -392,6 +412,10 @@ class LevelCamera:
     def hot(self):
         return self.in_image() and self.received < self.need
 
+    def frame(self, rng):
+        d, bearing, rise = self.view()
+        return frame_at(60.0 if self.hot() else 0.0, bearing, math.atan2(rise, d), rng)
+
     def _loop(self):
         from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
         be, dt, tick = self.sc.be, 0.02, 0
@@ -403,9 +427,9 @@ class LevelCamera:
                 d, bearing, rise = self.view()
                 det = ObjectDetection(type=C.TYPE_FIRE)
                 det.header.stamp.secs, det.header.stamp.nsecs = divmod(int(be.clock.now() * 1e9), 10 ** 9)
-                det.relative_position.x = d * math.cos(bearing)
-                det.relative_position.y = d * math.sin(bearing)
-                det.relative_position.z = rise
+                det.relative_position.x = d * math.cos(self.scale * bearing)
+                det.relative_position.y = d * math.sin(self.scale * bearing)
+                det.relative_position.z = self.scale * rise
                 det.image_detection.camera_direction = C.CAMERA_FORWARD
                 be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
             be.clock.sleep(dt)
@@ -457,6 +481,55 @@ def test_a_fire_beyond_the_height_the_uav_may_steer_to_is_not_judged_out_from_th
     assert cam.received < cam.need and sinking.done
     assert not s.result.extinguished, s.result.message
     assert sc.statuses == []
+
+
+class RingCamera(LevelCamera):
+    """LevelCamera of a holder seen from its watering distance: a ring of flames wider than the view around
+    the hole (fake_thermal.ring_frame), and a detector whose centroid of the ring's part in the frame reads a
+    fifth of the hole's true offset from the image centre (ual_sim's realistic world, a UAV 1.2 m from the
+    wall: 1.4 of 6 deg)."""
+    scale = 0.2
+
+    def frame(self, rng):
+        d, bearing, rise = self.view()
+        centre = (15.5 - FOCAL * rise / d, 15.5 - FOCAL * math.tan(bearing))
+        return fake_thermal.ring_frame(200.0 if self.hot() else 0.0, centre, outer=24.0, rng=rng)
+
+
+class SideDrift:
+    """Once the pump runs: the GNSS error wanders sideways at `rate` m/s up to `limit` m (ual_sim's realistic
+    bias: ~0.18 m in 2 s); the UAL holds its set-point on the fix, so the UAV and its jet move the other way."""
+
+    def __init__(self, sc, rate=0.06, limit=0.3):
+        self.sc, self.rate, self.limit, self.stop, self.started = sc, rate, limit, False, False
+        sc.be.clock.start_thread(self._loop, name='side drift')
+
+    def _loop(self):
+        ual, clock = self.sc.ual, self.sc.be.clock
+        while not self.stop and not ual.pump:
+            clock.sleep(0.02)
+        self.started, t0 = True, clock.now()
+        while not self.stop:
+            with ual.lock:
+                ual.gnss_bias = np.array([0.0, min(self.limit, self.rate * (clock.now() - t0)), 0.0])
+            clock.sleep(0.02)
+
+
+def test_the_jet_follows_the_hole_a_ring_of_flames_filling_the_view_rings_while_the_uav_drifts_sideways(scenes):
+    """Issue 17 (realistic seed 103: three full tanks left in1_e at 86 %): from the watering distance the ring
+    of flames fills the thermal camera's view, the detector's centroid hardly moves as the UAV drifts sideways
+    with its GNSS fix, and the aim stayed beside the 0.15 m hole. Aimed on the hole the raw image shows, the
+    jet stays within 6 cm of its centre and the fire gets its water and is put out. Before: 1.0 s of water in of
+    3.0 (the jet 0.15 rad off before a detection's bearing turned it), the tank ran dry with the fire burning."""
+    sc = scenes()
+    sc.ual.water = 3.0
+    cam = RingCamera(sc, need=3.0, hit=0.06)
+    drift = SideDrift(sc)
+    sc.threads = (cam, drift)
+    s = sc.extinguish()
+    assert drift.started
+    assert cam.received >= cam.need, f'{cam.received:.2f} s of water in of {cam.need:.2f}: {s.result.message}'
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
 
 
 class FadingCamera(LevelCamera):

@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from fake_thermal import fire_frame
-from mbzirc_agents.tasks.thermal_contrast import FireContrast, contrast, frame_of, lock_masks
+from fake_thermal import fire_frame, ring_frame
+from mbzirc_agents.tasks.thermal_contrast import FireContrast, contrast, frame_of, lock_masks, warm_spot
 
 
 class Clock:
@@ -110,3 +110,34 @@ def test_without_the_detector_a_warm_area_is_locked_only_when_the_frame_before_s
     assert not fc.lock_on_latest(steady=True)
     feed(fc, clock, fire_frame(20.0))
     assert fc.lock_on_latest(steady=True)
+
+
+@pytest.mark.parametrize('outer', [17.0, 20.0, 24.0])
+@pytest.mark.parametrize('off', [(0.0, -4.0), (0.0, 4.5), (-3.0, 2.0), (2.5, -1.5), (0.0, 0.0)])
+def test_the_warm_spot_of_a_ring_of_flames_wider_than_the_frame_is_the_hole_it_rings(outer, off):
+    """From its watering distance a holder's ring of flames fills the frame: the centroid of its part in the
+    frame stayed near the image centre (a hole 4 px off read ~1 px off, or on the wrong side), so the aim
+    never came onto the hole. The hole, whole in the frame, says where the fire is."""
+    rng = np.random.default_rng(3)
+    centre = (15.5 + off[0], 15.5 + off[1])
+    for contrast_ in (200.0, 60.0, 12.0):             # the fire fading under the water
+        spot = warm_spot(ring_frame(contrast_, centre, outer=outer, rng=rng), 4.0)
+        assert spot is not None
+        assert abs(spot[0] - centre[1]) <= 0.5 and abs(spot[1] - centre[0]) <= 0.5, (contrast_, spot)
+        assert spot[2], 'the hole ringed by the flames is the fire\'s centre'
+
+
+def test_the_warm_spot_of_a_whole_fire_in_the_frame_is_its_centre():
+    """A fire seen whole (from farther) keeps its centroid: a disc, and a ring with its hole."""
+    rng = np.random.default_rng(4)
+    for frame, centre in ((fire_frame(40.0, rng=rng, radius=5.0, centre=(12.0, 19.0)), (12.0, 19.0)),
+                          (ring_frame(80.0, (17.0, 13.0), outer=8.0, hole=3.0, rng=rng), (17.0, 13.0))):
+        spot = warm_spot(frame, 4.0)
+        assert abs(spot[0] - centre[1]) <= 0.5 and abs(spot[1] - centre[0]) <= 0.5, spot
+        assert spot[2]
+
+
+def test_a_fire_cut_by_the_frames_edge_around_no_hole_is_not_whole():
+    """Its centroid lies short of its centre, towards the image's: the aim keeps the detector's bearing then."""
+    spot = warm_spot(fire_frame(40.0, rng=np.random.default_rng(5), radius=8.0, centre=(15.5, -1.0)), 4.0)
+    assert spot is not None and not spot[2]

@@ -104,19 +104,56 @@ def contrast(frame: np.ndarray, masks: tuple) -> float:
     return float(hot.mean() - wall[np.isfinite(flat[core.ravel()])].mean())
 
 
+def _grow4(mask: np.ndarray) -> np.ndarray:
+    """mask grown by one pixel up, down, left and right."""
+    out = mask.copy()
+    out[1:, :] |= mask[:-1, :]
+    out[:-1, :] |= mask[1:, :]
+    out[:, 1:] |= mask[:, :-1]
+    out[:, :-1] |= mask[:, 1:]
+    return out
+
+
+def enclosed(core: np.ndarray) -> np.ndarray:
+    """The pixels outside core that core encloses: not 4-connected to the frame's border through pixels
+    outside it (a fire holder's hole inside its ring of flames)."""
+    free = ~core
+    outside = np.zeros_like(core)
+    for edge in ((0, slice(None)), (-1, slice(None)), (slice(None), 0), (slice(None), -1)):
+        outside[edge] = free[edge]
+    while True:
+        grown = _grow4(outside) & free
+        if (grown == outside).all():
+            return free & ~outside
+        outside = grown
+
+
 def warm_spot(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
-    """(column, row) of the centroid of the frame's warm core (`lock_masks`), pixel 0's centre = 0; None when
-    nothing stands min_rise over its wall."""
+    """(column, row, whole) of the fire's centre in frame, pixel 0's centre = 0; None when nothing stands
+    min_rise over its wall (`lock_masks`). The centre is the centroid of the warm core with the cooler area it
+    encloses (a holder's hole ringed by flames); when the core reaches the frame's edge, the centroid of that
+    enclosed area alone. whole: that centre is the fire's (False: a core cut by the frame's edge around no
+    enclosed area, whose centroid lies short of the fire's centre, towards the image's).
+    Why: at the watering distance a holder's ring of flames is as wide as the camera's view, and the centroid
+    of the part of it inside the frame stays near the image centre whatever the aim (ual_sim's realistic
+    world, a UAV at 1.5 m, its watering distance: a fire 5.8 deg off the heading read 3.6 deg off; at 1.2 m,
+    where the GNSS fix's wander takes it, 0.0 deg, and at 1.0 m 3 deg the wrong way), while the hole it rings
+    is whole in the frame and its centre is the fire's (there: within 0.3 deg)."""
     masks = lock_masks(frame, min_rise)
     if masks is None:
         return None
-    rows, cols = np.nonzero(masks[0])
-    return float(cols.mean()), float(rows.mean())
+    core = masks[0]
+    hole = enclosed(core)
+    clipped = core[0, :].any() or core[-1, :].any() or core[:, 0].any() or core[:, -1].any()
+    ringed = hole.sum() >= MIN_CORE
+    rows, cols = np.nonzero(hole if clipped and ringed else core | hole)
+    return float(cols.mean()), float(rows.mean()), ringed or not clipped
 
 
 def pixel_bearing(column: float, fov_deg: float) -> float:
     """rad off the optical axis, positive to the left (a counter-clockwise turn), of a pixel column of the
-    32-px-wide image (the detector's placement rule: fire_detector geometry.forward_fire_position)."""
+    32-px-wide image (the detector's placement rule: fire_detector geometry.forward_fire_position); of a pixel
+    row, rad above the axis (the image is square: its rows span the same field of view)."""
     focal = (FRAME_SIZE / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
     return math.atan2(-(column - (FRAME_SIZE - 1) / 2.0), focal)
 
@@ -178,13 +215,13 @@ class FireContrast:
             return True
 
     def warm_spot(self) -> Optional[tuple]:
-        """(column, row, frame time) of the latest recent frame's warm core (standing LOCK_MIN_RISE x
-        ~out_contrast over its wall), None without one."""
+        """(column, row, frame time, whole) of the fire's centre in the latest recent frame (module
+        `warm_spot`, its warm core standing LOCK_MIN_RISE x ~out_contrast over its wall), None without one."""
         with self.lock:
             if self.frame is None or self.now() - self.frame_time > MAX_AGE:
                 return None
             spot = warm_spot(self.frame, LOCK_MIN_RISE * self.out_contrast)
-            return None if spot is None else (*spot, self.frame_time)
+            return None if spot is None else (spot[0], spot[1], self.frame_time, spot[2])
 
     @property
     def locked(self) -> bool:
