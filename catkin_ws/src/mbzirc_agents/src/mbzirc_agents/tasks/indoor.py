@@ -650,10 +650,14 @@ class ExtinguishIndoorFire(AgentTask):
         next steady frames (until then no answer counts, hot or cold). Why: a UAV holds its GNSS set-point, so
         the drift of its GNSS error moves it sideways off where it watered from and the frozen jet off the fire
         (tenths of a metre in tens of seconds), while the raw image still sees the fire 15-25 degC over its
-        wall; the height stays held by the altimeter (`_hold_frozen_height`)."""
+        wall; the height stays held by the altimeter (`_hold_frozen_height`). A frame whose fire is cut by its
+        edge around no hole (thermal_contrast.warm_spot: not whole) turns nothing: from the watering distance
+        its centroid may lie on the wrong side of the image centre (ual_sim's realistic world, 1.0 m from the
+        wall: a fire 6 deg left read 3 deg right; realistic seed 103: a UAV its GNSS drift had taken within 1.0 m
+        of the wall turned -13 deg twice in a row, then its tank ran dry)."""
         a = self.agent
         spot = self.contrast.warm_spot()
-        if spot is None or spot[2] < self.raw_turn_time + RAW_TURN_SETTLE:
+        if spot is None or not spot[3] or spot[2] < self.raw_turn_time + RAW_TURN_SETTLE:
             return yaw
         bearing = pixel_bearing(spot[0], a.p.forward_camera_fov)
         if abs(bearing) < a.p.aim_bearing_tolerance:
