@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import rospy
 from mbzirc_comm_objs.msg import GoToGoal, Object, ObjectList, TakeOffGoal, ExtinguishFacadeFireGoal, LandGoal
 
 from fake_backend import FakeBackend
@@ -219,6 +220,49 @@ def test_gnss_jump_is_doubted_and_the_uav_holds(uav):
     agent._on_pose(nan)
     assert agent.position()[0] == pytest.approx(before[0] + 5.0, abs=0.3)
     assert any('NaN' in e for e in be.errors)
+
+
+def test_a_go_to_flies_on_once_a_doubted_gnss_jump_ends(uav):
+    """A GNSS jump while a go-to is flown turns it into a hold; once the pose is back (trusted) the leg goes on
+    to its end. Before, the set-point was dropped for good and the UAV hovered until the leg timed out
+    (ground_station live_page rostest: an operator's recall home failed mid-way)."""
+    agent, ual, be = uav
+    ual.follow_velocity = True                       # the hold's zero velocity stops the go-to, as in ual_sim
+    assert take_off(be) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=goal_pose(12, 0, 3, 0.0)))
+    be.clock.sleep(0.5)
+    ual.gnss_offset = np.array([5.0, 0.0, 0.0])
+    be.clock.sleep(0.3 * agent.p.pose_jump_hold)
+    assert agent.pose_in_doubt()
+    ual.gnss_offset = np.zeros(3)
+    assert s.wait(60) == 'succeeded', s.result.message
+    assert ual.pos[0] == pytest.approx(12.0, abs=0.5)
+
+
+def test_poses_published_seconds_apart_are_no_jump_however_late_they_arrive(uav):
+    """A loaded machine: the agent's clock lags, two poses it receives 0.3 s apart by that clock were
+    published 3 s apart (their stamps) by a UAV flying at its speed: 4.5 m is flight, not a GNSS jump. The
+    same 4.5 m between poses published 0.3 s apart is a jump."""
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    on_pose = be.subs['ual/pose']
+    be.subs['ual/pose'] = lambda _msg: None          # the fake UAL's own poses no longer reach the agent
+    be.clock.sleep(0.2)
+    t = be.now()
+    start = goal_pose(0.0, 0.0, 3.0, 0.0)
+    start.header.stamp = rospy.Time.from_sec(t)
+    agent.pose_doubt_since = None
+    on_pose(start)
+    late = goal_pose(4.5, 0.0, 3.0, 0.0)
+    late.header.stamp = rospy.Time.from_sec(t + 3.0)
+    on_pose(late)
+    assert not agent.pose_in_doubt() and agent.position()[0] == pytest.approx(4.5)
+    quick = goal_pose(9.0, 0.0, 3.0, 0.0)
+    quick.header.stamp = rospy.Time.from_sec(t + 3.3)
+    on_pose(quick)
+    assert agent.pose_in_doubt() and agent.position()[0] == pytest.approx(4.5)
+    be.subs['ual/pose'] = on_pose
 
 
 def test_exception_in_the_idle_state_restarts_the_state_machine(uav):
