@@ -532,3 +532,27 @@ def test_a_uav_inside_a_floor_puts_out_the_indoor_fire_it_found_there_before_fac
              26: FireView(26, *holder[:3], C.KIND_INDOOR)}                # the fire just found on floor 2
     [cmd] = s.decide(WorldView(10.0, {"2": uav}, fires))
     assert cmd.goal.get("fire_id") == 26 or cmd.target == ("view", 26), cmd   # before: leaving for fire 15
+
+
+def test_a_fire_seen_through_a_doorway_is_reached_through_the_room_it_is_watered_from():
+    """Realistic seed 109 (benchmark on 19ac3a6): fire 20, on floor 2's south room's wall, was found by a
+    search of the north room (through the doorway). The north room was the way to it, but from there no clear
+    way led to its viewpoint: UAV 2 entered the north room, was sent out through the same window, in again,
+    6 times in 300 s, and floor 1 was never searched. Rule: the finding room is the way only when the
+    fire's viewpoint is reachable from it; else the viewpoint's room."""
+    s = Strategy(StrategyParams())
+    south, north = s.p.layout.rooms[2]
+    holder = min((h for h in s.p.layout.indoor_holders if G.floor_of(h[2]) == 2),
+                 key=lambda h: math.dist(h[:2], south.inner[:2]))
+    assert s.p.layout.room_for(2, holder[:3]) == 0
+    found = Command("2", C.SEARCH_INDOOR, {"floor": 2, "path": list(north.path)},
+                    "searching floor 2 indoors (room 1)", (2, 1))
+    s.on_sent(found)
+    s.on_result(found, True, {"fire_ids": [20]}, now=10.0)
+    s.book.pending_ids.clear()
+    fire = FireView(20, *holder[:3], C.KIND_INDOOR)
+    # out of the north room, in front of the south room's window: in through it (before: round to the north)
+    uav = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, *south.entry[:3], ual_state=C.UAL_FLYING_AUTO,
+                    water_level=2.0, last_seen=20.0)
+    [cmd] = s.decide(WorldView(20.0, {"2": uav}, {20: fire}))
+    assert (cmd.task, cmd.target) == (C.ENTER_BUILDING, (2, 0)), cmd
