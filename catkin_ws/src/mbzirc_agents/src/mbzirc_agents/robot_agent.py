@@ -814,10 +814,29 @@ class RobotAgent(Agent):
 
     # ---- framework hooks -------------------------------------------------------------------------------
     def safe_stop(self) -> None:
-        """After a failed or preempted task: pump off, stop where we are."""
+        """After a failed or preempted task: pump off, stop where we are, keep only a hover box there."""
         if self.pumping or self.p.payload == 'water':
             self.stop_pump()
         self.hold()
+        self._keep_only_a_hover_box()
+
+    def _keep_only_a_hover_box(self) -> None:
+        """A flying UAV whose task failed or was preempted holds a hover box where it is and frees the way it
+        was flying (go_to, a step...): the way stays reserved otherwise until its next task, and an idle UAV
+        declines to step aside from it. Why (realistic seed 110): go_home failed 1.3 m short of the pad's
+        column, the blanket UAV hovered idle 900 s with its go_to box, and both other UAVs' take-offs were
+        refused to the end. When the hover box is refused, everything is kept (never fly unreserved)."""
+        if self.ROBOT_TYPE != 'uav' or not self.p.use_regions or self.ual_state != C.UAL_FLYING_AUTO:
+            return
+        with self._regions_lock:
+            ways = [label for label in self.held if label not in ('hold', 'parked')]
+        if not ways:
+            return
+        here = self.position(wait=0.0)
+        if here is None or not self._ask('hold', self.hold_box(here))[0]:
+            return
+        for label in ways:
+            self.free(label)
 
     def ground_anchor(self, p: Sequence[float]) -> tuple:
         """(x, y) of the boxes a landed UAV reserves (parked box, take-off column): its home pad when it

@@ -101,6 +101,24 @@ def test_preempted_go_to_stops_the_uav(uav):
     assert np.linalg.norm(ual.pos[:2]) > 1.0 and np.linalg.norm(ual.pos[:2] - [-15, 30]) > 5
 
 
+def test_a_go_to_that_fails_in_the_air_leaves_only_a_hover_box(uav):
+    """Realistic seed 110 (benchmark on 19ac3a6): the blanket UAV's go_home ended 'not there after 53 s'
+    1.3 m short of its pad and the UAV kept its go_to box (the whole way home) while it hovered idle for
+    900 s: both other UAVs' take-offs were refused to the end, and it declined the manager's requests to step
+    aside ('our boxes in the way: go_to'). Rule: a flying UAV whose task fails or is preempted keeps a hover
+    box where it is and frees the way it was flying."""
+    agent, ual, be = uav
+    assert take_off(be) == 'succeeded'
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
+    be.clock.sleep(1.0)
+    s.preempt = True
+    assert s.wait(5) == 'preempted'
+    be.clock.sleep(0.3)
+    mine = {label for aid, label in ual.regions.regions() if aid == '2'}
+    assert 'go_to' not in mine and 'hold' in mine, mine
+
+
 def test_unknown_fire_id_aborted(uav):
     agent, _, be = uav
     s = be.servers['extinguish_facade_fire_action']
