@@ -86,14 +86,19 @@ def test_go_to_bad_goals(uav, goal, words):
     assert s.wait() == 'aborted' and words in s.result.message
 
 
-def test_preempted_go_to_stops_the_uav(uav):
-    agent, ual, be = uav
+def preempt_a_go_to(be):
+    """Take off, fly a go-to towards a far point for 1 s, preempt it."""
     assert take_off(be) == 'succeeded'
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
     be.clock.sleep(1.0)
     s.preempt = True
     assert s.wait(5) == 'preempted'
+
+
+def test_preempted_go_to_stops_the_uav(uav):
+    agent, ual, be = uav
+    preempt_a_go_to(be)
     be.clock.sleep(0.2)
     p1 = ual.pos.copy()
     be.clock.sleep(0.5)
@@ -108,12 +113,7 @@ def test_a_go_to_that_fails_in_the_air_leaves_only_a_hover_box(uav):
     aside ('our boxes in the way: go_to'). Rule: a flying UAV whose task fails or is preempted keeps a hover
     box where it is and frees the way it was flying."""
     agent, ual, be = uav
-    assert take_off(be) == 'succeeded'
-    s = be.servers['go_to_action']
-    s.send(GoToGoal(waypoint=goal_pose(-15, 30, 3)))
-    be.clock.sleep(1.0)
-    s.preempt = True
-    assert s.wait(5) == 'preempted'
+    preempt_a_go_to(be)
     be.clock.sleep(0.3)
     mine = {label for aid, label in ual.regions.regions() if aid == '2'}
     assert 'go_to' not in mine and 'hold' in mine, mine
