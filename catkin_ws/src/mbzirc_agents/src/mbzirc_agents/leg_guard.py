@@ -75,14 +75,6 @@ def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequenc
     return float(ahead.min()) if ahead.size >= MIN_BEAMS else None
 
 
-def free_ahead(points: np.ndarray, here: Sequence[float], direction: Sequence[float], half_width: float,
-               reach: float) -> Optional[float]:
-    """How far ahead along the unit direction the corridor of half_width is free of returns (the
-    MIN_BEAMS-th nearest one in it, no farther than reach); None when free as far as reach."""
-    ahead = np.sort(corridor_distances(points, here, direction, half_width, reach))
-    return float(ahead[MIN_BEAMS - 1]) if ahead.size >= MIN_BEAMS else None
-
-
 def is_blind(ranges: Sequence[float]) -> bool:
     """True when no beam of a scan measured anything (every range NaN; REP 117 +-inf are measurements)."""
     r = np.asarray(ranges, dtype=float)
@@ -174,4 +166,4 @@ class LegGuard:
             raise TaskError(f'{what}: {self.reason}')
 
 
-__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'free_ahead', 'is_blind']
+__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'is_blind']

@@ -833,7 +833,7 @@ class RobotAgent(Agent):
         if not ways:
             return
         here = self.position(wait=0.0)
-        if here is None or not self._ask('hold', self.hold_box(here))[0]:
+        if not self._ask('hold', self.hold_box(here))[0]:
             return
         for label in ways:
             self.free(label)

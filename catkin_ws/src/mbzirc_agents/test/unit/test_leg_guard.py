@@ -10,7 +10,8 @@ from mbzirc_comm_objs.msg import SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from laser_world import ANGLE_MIN, BEAMS, INC, cast, wall_boxes
-from mbzirc_agents.leg_guard import blocking_distance, corridor_distances, free_ahead, is_blind
+from mbzirc_agents.leg_guard import blocking_distance, corridor_distances, is_blind
+from mbzirc_agents.wall_clearance import wall_ahead
 from mbzirc_arena.laser import scan_points
 from fake_ual import goal_pose
 from test_passage import UAV_R, WALL_Y, enter, ugv, uav  # noqa: F401 - fixtures: a UGV, a UAV
@@ -89,8 +90,8 @@ def test_a_scan_with_every_beam_nan_is_blind_one_with_inf_or_a_return_is_not():
 
 def test_the_free_way_ahead_is_to_the_second_nearest_return_in_the_corridor():
     pts = points_seen(18.9 + 2.0, 14.0, math.pi, [(17.7, 6.9, 17.9, 19.3)])
-    assert free_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 4.0) == pytest.approx(3.0, abs=0.02)
-    assert free_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 2.5) is None
+    assert wall_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 4.0) == pytest.approx(3.0, abs=0.02)
+    assert wall_ahead(pts, (20.9, 14.0), (-1.0, 0.0), HALF, 2.5) is None
 
 
 # ---- missions' legs ----------------------------------------------------------------------------------------

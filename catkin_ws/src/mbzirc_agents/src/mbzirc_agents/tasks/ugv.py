@@ -13,8 +13,8 @@ from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
-from ..leg_guard import LegGuard, blocking_distance, free_ahead
-from ..wall_clearance import back_off
+from ..leg_guard import LegGuard, blocking_distance
+from ..wall_clearance import back_off, wall_ahead
 from .indoor import SearchIndoor
 
 CARROT_MAX = 1.0         # m: the farthest ahead a guarded leg's set-point is placed (1 s at the UGV's speed)
@@ -150,7 +150,7 @@ class GuardedDrive:
     def step(self, points, here, u, left: float) -> float:
         """How far ahead along u the next set-point goes (see the class)."""
         p = self.agent.p
-        free = free_ahead(points, here, u, p.leg_guard_half_width, p.leg_guard_stop_distance + CARROT_MAX)
+        free = wall_ahead(points, here, u, p.leg_guard_half_width, p.leg_guard_stop_distance + CARROT_MAX)
         room = CARROT_MAX if free is None else free - p.leg_guard_stop_distance
         return float(max(CARROT_MIN, min(CARROT_MAX, left, room)))
 
