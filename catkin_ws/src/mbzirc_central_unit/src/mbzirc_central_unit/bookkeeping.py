@@ -35,6 +35,9 @@ class Bookkeeping:
         self.leg_backoff = LegBackoff(params.leg_blocked_backoff, params.leg_blocked_backoff_max,
                                       params.max_blocked_legs)
         self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
+        # facade floors searched once more, whatever their count: a fire there was judged misplaced
+        # (failure_rules.py); the next search of the floor that ends takes the floor off
+        self.search_again: set[int] = set()
         self.notes: list[str] = []  # log lines of the failure rules, taken by the node (take_notes)
         # the room (floor, index) each agent last entered, and the room whose search found each indoor fire:
         # the way to a fire is through that room (IndoorPhase.room_to_reach), and out through that window
@@ -55,8 +58,11 @@ class Bookkeeping:
         if succeeded:
             self.consecutive_failures[cmd.agent_id] = 0
             self.last_done[cmd.agent_id] = cmd
+            if cmd.task in (C.EXTINGUISH_FACADE_FIRE, C.EXTINGUISH_INDOOR_FIRE):
+                self.unconfirmed.note_watered_hot(cmd.target)   # the agents succeed only after watering it hot
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
+                self.notes += [n for n in map(self.unconfirmed.note_found, map(int, result["fire_ids"])) if n]
                 if cmd.task == C.SEARCH_INDOOR and isinstance(cmd.target, tuple) \
                         and all(isinstance(k, int) for k in cmd.target):   # a room's (floor, index)
                     for i in result["fire_ids"]:
@@ -79,6 +85,8 @@ class Bookkeeping:
             note = self.unconfirmed.note(cmd.target, cmd.agent_id)
             if note:
                 self.notes.append(note)
+                if cmd.task == C.EXTINGUISH_FACADE_FIRE and self.unconfirmed.search_again(cmd.target):
+                    self.search_again.add(cmd.goal["_floor"])
         if self.failures[key] < self.p.max_failures:
             return False
         self._count_search(cmd)  # a search given up counts as one, so that the mission moves on
@@ -98,6 +106,7 @@ class Bookkeeping:
     def _count_search(self, cmd: Command) -> None:
         if cmd.task == C.SEARCH_FACADE:
             self.facade_searches[cmd.target] += 1
+            self.search_again.discard(cmd.target)
         elif cmd.task == C.SEARCH_INDOOR:
             self.indoor_searches[cmd.target] += 1
         elif cmd.task == C.LOOK_FOR_GROUND_FIRES:

@@ -69,7 +69,7 @@ MAX_TASK_FAILURES = 3           # failures of one task kind on one target before
 LEG_BLOCKED_BACKOFF = 10.0
 LEG_BLOCKED_BACKOFF_MAX = 60.0
 MAX_BLOCKED_LEGS = 3
-# 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is probably out
+# 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is doubted (failure_rules.py)
 NOT_SEEN_HOT_LIMIT = 2
 # Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 4 m apart: the agents'
 # boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of its reported height,

@@ -9,10 +9,18 @@
 2. A fire not seen hot. extinguish_facade_fire / extinguish_indoor_fire abort with 'fire N not seen hot
    from the watering pose: not judged out: ...' after pumping water on the fire's locked hole (facade) or
    its confirmed track (indoors) without one hot answer there (the agents' cold_check.NOT_SEEN_HOT; every
-   such abort pumps first). A fire already put out reads like that, and the estimator keeps it active.
-   Rule: after `not_seen_hot_limit` such aborts (any robots) the fire is "probably out, unconfirmed": no
-   robot is sent to it while other work remains; it may be revisited when nothing else is left. Other
-   failures (fire not found, no water flows, time-outs) never count: a fire merely not found is not out.
+   such abort pumps first). Two causes read alike: a fire already put out, and an estimate off the fire
+   (realistic seed 108, fire D_3: the estimate 1.2 m off, the UAV locked on a hole 2.3 m from the fire,
+   'not seen hot' twice, no water ever went into it). What tells them apart: whether some extinguish task
+   on the fire SUCCEEDED, which the agents' tasks do only after seeing it hot from their watering pose and
+   watering it (out, or the tank ran dry before the cold answers: cold_check.dry_tank_verdict).
+   Rule: after `not_seen_hot_limit` such aborts (any robots) the fire is doubted: no robot is sent to it
+   while other work remains; it may be revisited when nothing else is left. Watered hot before: "probably
+   out, unconfirmed" (its floor is done, water_decider.facade_floors_open). Never watered hot: "misplaced":
+   its floor is searched again (once), and a search that reports it again (the estimator moved the track
+   onto the new sightings: a detection within its gates updates it, no new track) makes it a target again,
+   once; a second misplacement leaves it doubted until the end. Other failures (fire not found, no water
+   flows, time-outs) never count: a fire merely not found is not out.
 
 The action results have no structured field for either kind (mbzirc_comm_objs, pinned): the abort text
 is matched on the agents' fixed phrases below.
@@ -75,19 +83,53 @@ class LegBackoff:
 
 
 class UnconfirmedFires:
-    """Fires that repeatedly were not seen hot after water from their watering pose: probably out."""
+    """Fires repeatedly not seen hot after water from their watering pose: probably out when some extinguish
+    task on them succeeded (watered hot), else misplaced (see the module docstring, 2.)."""
 
     def __init__(self, limit: int) -> None:
         self.limit = limit
         self.aborts: Counter[int] = Counter()
+        self.watered_hot: set[int] = set()
+        self.found_again_once: set[int] = set()
+
+    def note_watered_hot(self, fire_id: int) -> None:
+        """An extinguish task on `fire_id` succeeded: it saw the fire hot from its watering pose and watered it."""
+        self.watered_hot.add(fire_id)
 
     def note(self, fire_id: int, agent_id: str) -> Optional[str]:
-        """A not-seen-hot abort on `fire_id`; the log line when the fire just became probably out."""
+        """A not-seen-hot abort on `fire_id`; the log line when the fire just became doubted."""
         self.aborts[fire_id] += 1
-        if self.aborts[fire_id] == self.limit:
-            return (f"fire {fire_id}: not seen hot after water from its watering pose {self.limit} times (last by "
-                    f"{agent_id}): probably out, unconfirmed; no robot is sent to it while other work remains")
-        return None
+        if self.aborts[fire_id] != self.limit:
+            return None
+        head = (f"fire {fire_id}: not seen hot after water from its watering pose {self.limit} times "
+                f"(last by {agent_id})")
+        if fire_id in self.watered_hot:
+            return (f"{head}, watered hot before: probably out, unconfirmed; no robot is sent to it while other "
+                    "work remains")
+        again = ("its floor is searched again" if fire_id not in self.found_again_once
+                 else "found again once already: left until nothing else remains")
+        return (f"{head}, never watered hot: misplaced (its estimate off the fire), not a target while other work "
+                f"remains; {again}")
+
+    def note_found(self, fire_id: int) -> Optional[str]:
+        """A search reported `fire_id` (hot there, its track near): a misplaced fire found for the first time
+        since is a target again (its count starts again); the log line then."""
+        if not self.search_again(fire_id):
+            return None
+        self.found_again_once.add(fire_id)
+        del self.aborts[fire_id]
+        return f"fire {fire_id}: misplaced, found again by a search: a target again at its estimate"
+
+    def doubted(self, fire_id: int) -> bool:
+        """Probably out or misplaced: no robot is sent to it while other work remains."""
+        return self.aborts[fire_id] >= self.limit
 
     def probably_out(self, fire_id: int) -> bool:
-        return self.aborts[fire_id] >= self.limit
+        return self.doubted(fire_id) and fire_id in self.watered_hot
+
+    def misplaced(self, fire_id: int) -> bool:
+        return self.doubted(fire_id) and fire_id not in self.watered_hot
+
+    def search_again(self, fire_id: int) -> bool:
+        """Misplaced and not yet found again: its floor deserves one more search."""
+        return self.misplaced(fire_id) and fire_id not in self.found_again_once

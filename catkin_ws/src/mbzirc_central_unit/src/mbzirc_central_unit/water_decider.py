@@ -46,15 +46,17 @@ class WaterDecider(Decider):
         """Facade floors whose fire is not out yet and that still deserve a search or a fire job.
 
         Rule (one facade fire per storey, as `extinguished_on` assumes): a floor whose fire was found and then
-        watered until it was not seen hot (probably out, failure_rules.py) is done like one whose fire is out;
-        searching its facade again finds nothing new (realistic runs: 50-105 s per such second search, before
-        the indoor floors). The fire itself is still revisited at the end (`_job`, 4.)."""
+        watered hot until it was not seen hot (probably out, failure_rules.py) is done like one whose fire is
+        out; searching its facade again finds nothing new (realistic runs: 50-105 s per such second search,
+        before the indoor floors). The fire itself is still revisited at the end (`_job`, 4.). A floor whose
+        fire was never seen hot from its watering pose (misplaced) is searched once more (`book.search_again`):
+        the fire may burn elsewhere on it (realistic seed 108: D_3 never searched again, 0.0)."""
         out = []
         for f in self.p.floor_priority:
             if world.extinguished_on(C.KIND_FACADE, f):
                 continue
             fires = world.fires_of(C.KIND_FACADE, f)
-            if self._confirmed(fires):
+            if self._confirmed(fires) or f in self.book.search_again:
                 out.append(f)
             elif not fires and self.book.facade_searches[f] < self.p.facade_searches:
                 out.append(f)
@@ -80,7 +82,7 @@ class WaterDecider(Decider):
             f = nearest(a, here)
             return (C.KIND_INDOOR, f.floor, f)
         # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first); fires
-        #    probably out (failure_rules.py) only when nothing else is left (4.)
+        #    doubted (probably out or misplaced, failure_rules.py) only when nothing else is left (4.)
         facade = self._confirmed(world.fires_of(C.KIND_FACADE))
         mine = [f for f in facade if owners.floor_owner.get(f.floor) == aid and self._fire_ok(a, f)]
         free = [f for f in facade if owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)]
@@ -97,7 +99,7 @@ class WaterDecider(Decider):
         open_floors = self.facade_floors_open(world)
         first = [f for f in open_floors if searches[f] == 0]
         second = [f for f in open_floors if searches[f] >= 1]
-        second = [f for f in second if searches[f] < self.p.facade_searches]
+        second = [f for f in second if searches[f] < self.p.facade_searches or f in self.book.search_again]
         indoor_floors = [f for f in self.indoor.floors_open(world)
                          if any(self.indoor.room_ok(a, f, i) for i in self.indoor.rooms_to_search(f))]
         groups = [first, second, indoor_floors] if self.p.second_search_first else [first, indoor_floors, second]
@@ -118,9 +120,9 @@ class WaterDecider(Decider):
             if here in candidates and near_building(a):
                 return (kind, here, None)
             return (kind, candidates[0], None)
-        # 4. the end: fires probably out but unconfirmed, revisited while time remains
+        # 4. the end: fires doubted (probably out but unconfirmed, or misplaced), revisited while time remains
         late = [f for f in world.fires_of(C.KIND_FACADE) + world.fires_of(C.KIND_INDOOR)
-                if self.book.unconfirmed.probably_out(f.fire_id) and owners.free_for(f.floor, aid, world)
+                if self.book.unconfirmed.doubted(f.fire_id) and owners.free_for(f.floor, aid, world)
                 and self._fire_ok(a, f)]
         if late:
             f = nearest(a, late)
@@ -143,8 +145,8 @@ class WaterDecider(Decider):
         return floor
 
     def _confirmed(self, fires: list[FireView]) -> list[FireView]:
-        """Fires not marked probably out after repeated 'not seen hot' aborts (failure_rules.py)."""
-        return [f for f in fires if not self.book.unconfirmed.probably_out(f.fire_id)]
+        """Fires not doubted (probably out or misplaced) after repeated 'not seen hot' aborts (failure_rules.py)."""
+        return [f for f in fires if not self.book.unconfirmed.doubted(f.fire_id)]
 
     def _facade_step(self, a: AgentView, floor: int, fire: Optional[FireView]) -> Command:
         """Next task towards searching a floor or putting out a facade fire: elevator transit first."""

@@ -94,6 +94,16 @@ def _abort(s, agent_id, text):
     s.on_result(cmd, False, {"message": text, "extinguished": False}, now=0.0)
 
 
+def _watered_hot(s, agent_id, fid=7, task=C.EXTINGUISH_FACADE_FIRE, floor=1):
+    """An extinguish task that saw the fire hot from its watering pose, watered it and ran its tank dry before
+    the cold answers (the agents' dry_tank_verdict): SUCCEEDED, not out."""
+    cmd = Command(agent_id, task, {"fire_id": fid, "_floor": floor}, f"water on fire {fid}", fid)
+    s.on_sent(cmd)
+    s.on_result(cmd, True, {"extinguished": False, "water_left": 0.0,
+                            "message": f"fire {fid} the tank ran dry before 3 cold answers in a row with water "
+                                       "flowing (1 so far): left for a top-up"}, now=0.0)
+
+
 def _on_fire(cmds, fid):
     return [c for c in cmds if c.target == fid or c.goal.get("fire_id") == fid]
 
@@ -102,6 +112,7 @@ def test_a_facade_fire_not_seen_hot_twice_is_probably_out_and_left_while_other_w
     s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
     assert _on_fire(s.decide(_uav_world()), 7)          # nearest: fire 7, in front of the UAV
     s.book.in_flight.clear()
+    _watered_hot(s, "3")                               # seen hot and watered until the tank ran dry
     _abort(s, "2", NOT_HOT)
     _abort(s, "3", NOT_HOT)                            # two robots, water pumped on the hole each time
     notes = s.take_notes()
@@ -128,6 +139,7 @@ def test_an_indoor_fire_already_out_is_not_revisited_by_every_refilled_uav_while
     s = Strategy(StrategyParams(facade_searches=0))
     assert _on_fire(s.decide(_inside_world(C.STATUS_EXTINGUISHED)), 18)   # the UAV beside it: fire 18
     s.book.in_flight.clear()
+    _watered_hot(s, "3", 18, C.EXTINGUISH_INDOOR_FIRE, 2)   # its UAV's tank ran dry waiting for cold answers
     for agent in ("3", "2"):            # two robots pumped on its track without a hot answer there
         cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
         s.on_sent(cmd)
@@ -196,6 +208,7 @@ def test_a_facade_floor_whose_fire_is_probably_out_gets_no_second_search_before_
     s = Strategy(StrategyParams())
     for floor in (0, 1, 2):
         s.book.facade_searches[floor] = 1               # every facade floor searched once
+    _watered_hot(s, "3")
     _abort(s, "2", NOT_HOT)
     _abort(s, "3", NOT_HOT)
     assert s.probably_out(7)
@@ -205,3 +218,82 @@ def test_a_facade_floor_whose_fire_is_probably_out_gets_no_second_search_before_
     cmds = s.decide(world)
     assert not [c for c in cmds if c.task == C.SEARCH_FACADE and c.target == 1], cmds
     assert not [c for c in cmds if c.target == ("transit", 1) and "via the elevator" in c.reason], cmds
+
+
+def _searched(s, agent_id, floor, fire_ids, task=C.SEARCH_FACADE, target=None):
+    """A search of `floor` (facade, or a room indoors) that ended reporting `fire_ids`."""
+    cmd = Command(agent_id, task, {"floor": floor, "path": []}, f"searching floor {floor}",
+                  floor if target is None else target)
+    s.on_sent(cmd)
+    s.on_result(cmd, True, {"fire_ids": fire_ids}, now=0.0)
+
+
+def _searches_floor(cmds, floor):
+    return [c for c in cmds if (c.task == C.SEARCH_FACADE and c.target == floor)
+            or (c.target == ("transit", floor) and "via the elevator" in c.reason)]
+
+
+def test_a_facade_fire_never_seen_hot_from_its_watering_pose_is_misplaced_and_its_facade_searched_again():
+    """Realistic seed 108 (fire D_3): the estimate was 1.2 m off the fire; the water UAV locked on a hole 2.3 m
+    from it and its extinguish task answered 'not seen hot' twice: no water ever went into the fire. The fire
+    was judged probably out and (738dab6) its floor done: the real fire was never searched again (0.0). Not seen
+    hot from its watering pose by anybody, never watered hot: its estimate is doubted and its facade searched
+    again; a search that finds it again makes it a target again."""
+    s = Strategy(StrategyParams())
+    for floor in (0, 1, 2):
+        s.book.facade_searches[floor] = 2 if floor == 0 else 1   # floor 0 done; 1 and 2 searched once
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)                            # never seen hot, never watered hot
+    notes = s.take_notes()
+    assert not s.probably_out(7)                       # before: probably out
+    assert any("fire 7" in n and "misplaced" in n and "searched again" in n for n in notes), notes
+    world = _uav_world(C.STATUS_EXTINGUISHED)           # floor 2's fire out
+    assert s.water.facade_floors_open(world) == [1]     # before: [] (floor 1 done, the fire never searched again)
+    cmds = s.decide(world)
+    assert _searches_floor(cmds, 1) and not _on_fire(cmds, 7), cmds
+    s.book.in_flight.clear()
+    _searched(s, "2", 1, [7])                          # the search saw it hot at a holder: fire 7 again
+    assert any("fire 7" in n and "found again" in n for n in s.take_notes())
+    assert s.water.facade_floors_open(world) == [1]     # open for its fire, not for a third search
+    assert _on_fire(s.decide(world), 7)                # a target again, at its new estimate
+
+
+def test_a_misplaced_facade_fire_gets_one_search_again_and_is_then_left_for_the_end():
+    s = Strategy(StrategyParams(indoor_floors=()))
+    for floor in (0, 1, 2):
+        s.book.facade_searches[floor] = 2 if floor == 0 else 1
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)
+    world = _uav_world(C.STATUS_EXTINGUISHED)
+    _searched(s, "3", 1, [])                           # the search again found nothing new
+    assert s.water.facade_floors_open(world) == []      # bounded: no further search of floor 1
+    assert _on_fire(s.decide(world), 7)                # nothing else left: the doubted fire is revisited
+    # found again, then never seen hot twice more: doubted for good (no second search again)
+    s2 = Strategy(StrategyParams(indoor_floors=()))
+    for floor in (0, 1, 2):
+        s2.book.facade_searches[floor] = 2 if floor == 0 else 1
+    _abort(s2, "2", NOT_HOT)
+    _abort(s2, "3", NOT_HOT)
+    _searched(s2, "3", 1, [7])
+    _abort(s2, "2", NOT_HOT)
+    _abort(s2, "3", NOT_HOT)
+    assert s2.water.facade_floors_open(world) == []
+    assert not s2.probably_out(7)
+
+
+def test_an_indoor_fire_never_seen_hot_from_its_watering_pose_is_misplaced_not_probably_out():
+    """Same rule indoors (one fact, failure_rules.UnconfirmedFires): 'not seen hot' twice without any water
+    seen going into it hot is a doubted estimate, not a fire out; a room search that finds it again makes it
+    a target again."""
+    s = Strategy(StrategyParams(facade_searches=0))
+    for agent in ("3", "2"):
+        cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
+        s.on_sent(cmd)
+        s.on_result(cmd, False, {"message": NOT_HOT_INDOORS, "extinguished": False}, now=0.0)
+    assert not s.probably_out(18)                      # before: probably out
+    assert any("fire 18" in n and "misplaced" in n for n in s.take_notes())
+    cmds = s.decide(_inside_world(C.STATUS_ACTIVE))
+    assert cmds and not _on_fire(cmds, 18)             # doubted: not a target while other work remains
+    s.book.in_flight.clear()
+    _searched(s, "2", 2, [18], C.SEARCH_INDOOR, (2, 1))
+    assert _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)   # found again: a target again
