@@ -744,10 +744,10 @@ class RobotAgent(Agent):
         box as the manager holds it, moved along one axis (over a pad it is not grown sideways)."""
         with self._regions_lock:
             held = self.held.get('hold')
+        here = self.position(wait=0.0)
         if held is None:     # (not reached: a yield is accepted only with the hold in the way) grown here
-            here = self.position(wait=0.0)
             held = grown(self.hold_box(here), self.pose_error_pad('hold'))
-        return step_aside_moves(self.position(wait=0.0), held, box, self.arena, C.BUILDINGS,
+        return step_aside_moves(here, held, box, self.arena, C.BUILDINGS,
                                 self.p.building_clearance, self.p.step_aside_min_z, self.p.step_aside_max)
 
     def _step_aside(self, task: AgentTask, winner: str, label: str, box: Box) -> bool:
