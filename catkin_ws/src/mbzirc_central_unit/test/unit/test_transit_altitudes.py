@@ -3,7 +3,7 @@ from mbzirc_arena import c3
 
 from mbzirc_central_unit import constants as C
 from mbzirc_central_unit.bookkeeping import Bookkeeping
-from mbzirc_central_unit.command import StrategyParams
+from mbzirc_central_unit.command import Command, StrategyParams
 from mbzirc_central_unit.transit import Router
 
 # mbzirc_agents' defaults: a hovering UAV's box reaches 1 m above and below it (~hold_half_size), grown by
@@ -31,3 +31,40 @@ def test_the_highest_transit_altitude_stays_under_the_flying_ceiling_and_below_t
     assert top + HELD_OFF + BOX_REACH_Z < c3.ARENA.bounds[5]
     # routes at the transit altitudes go around the tower (walls to 15 m): never over its roof
     assert top + HELD_OFF + BOX_REACH_Z < c3.TOWER_BOX[5]
+
+
+def _landed_for_good(book: Bookkeeping, agent_id: str) -> None:
+    """What the strategy's memory holds once a UAV's go-home with no work left has succeeded."""
+    cmd = Command(agent_id, C.GO_HOME_AND_REFILL, {}, "no work left")
+    book.finished.add(agent_id)
+    book.on_sent(cmd)
+    book.record(cmd, True)
+
+
+def test_the_uavs_still_flying_take_the_lowest_transit_altitudes_once_one_lands_for_good():
+    book = Bookkeeping(StrategyParams())
+    router = Router(StrategyParams(), book)
+    assert [router.altitude(a) for a in ('1', '2', '3')] == [4.0, 8.0, 12.0]
+    # the blanket UAV is sent home for good: while it flies home it keeps its layer
+    book.finished.add('1')
+    book.on_sent(Command('1', C.GO_HOME_AND_REFILL, {}, "no work left"))
+    assert [router.altitude(a) for a in ('2', '3')] == [8.0, 12.0]
+    book.in_flight.clear()
+    _landed_for_good(book, '1')
+    # landed: the water UAVs move down one layer each, still one layer apart
+    assert [router.altitude(a) for a in ('2', '3')] == [4.0, 8.0]
+    # it flies again (a new ground fire): it takes its layer back, the others theirs
+    assert router.altitude('1') == 4.0
+    book.on_sent(Command('1', C.TAKE_OFF, {"height": 4.0}, "to search the ground"))
+    assert [router.altitude(a) for a in ('1', '2', '3')] == [4.0, 8.0, 12.0]
+
+
+def test_a_crashed_uav_frees_its_transit_altitude_and_a_refill_does_not():
+    book = Bookkeeping(StrategyParams())
+    router = Router(StrategyParams(), book)
+    refill = Command('2', C.GO_HOME_AND_REFILL, {}, "refill: the tank is empty")
+    book.on_sent(refill)
+    book.record(refill, True)                      # landed at home for a refill: it flies again soon
+    assert router.altitude('3') == 12.0
+    book.crashed.add('2')
+    assert [router.altitude(a) for a in ('1', '3')] == [4.0, 8.0]
