@@ -62,7 +62,8 @@ class Bookkeeping:
                 self.unconfirmed.note_watered_hot(cmd.target)   # the agents succeed only after watering it hot
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
-                self.notes += [n for n in map(self.unconfirmed.note_found, map(int, result["fire_ids"])) if n]
+                if cmd.task == C.SEARCH_FACADE:   # it reports only fires it saw hot (indoors: the floor's tracks)
+                    self.notes += [n for n in map(self.unconfirmed.note_found, map(int, result["fire_ids"])) if n]
                 if cmd.task == C.SEARCH_INDOOR and isinstance(cmd.target, tuple) \
                         and all(isinstance(k, int) for k in cmd.target):   # a room's (floor, index)
                     for i in result["fire_ids"]:

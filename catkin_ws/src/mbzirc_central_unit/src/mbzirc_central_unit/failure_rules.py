@@ -13,13 +13,18 @@
    (realistic seed 108, fire D_3: the estimate 1.2 m off, the UAV locked on a hole 2.3 m from the fire,
    'not seen hot' twice, no water ever went into it). What tells them apart: whether some extinguish task
    on the fire SUCCEEDED, which the agents' tasks do only after seeing it hot from their watering pose and
-   watering it (out, or the tank ran dry before the cold answers: cold_check.dry_tank_verdict).
+   watering it (out, or the tank ran dry before the cold answers: cold_check.dry_tank_verdict). An abort
+   that spent no water never counts: indoors 'hot before aiming at its hot spot, cold after; no water spent'
+   says the fire was seen hot a moment before (realistic seed 108: in2_w, 86 % full, judged probably out by
+   one such abort, left burning).
    Rule: after `not_seen_hot_limit` such aborts (any robots) the fire is doubted: no robot is sent to it
    while other work remains; it may be revisited when nothing else is left. Watered hot before: "probably
    out, unconfirmed" (its floor is done, water_decider.facade_floors_open). Never watered hot: "misplaced":
-   its floor is searched again (once), and a search that reports it again (the estimator moved the track
-   onto the new sightings: a detection within its gates updates it, no new track) makes it a target again,
-   once; a second misplacement leaves it doubted until the end. Other failures (fire not found, no water
+   its facade floor is searched again (once). A facade search that reports a doubted fire (it reports only
+   fires it saw hot at a holder; the estimator moved the track onto the new sightings: a detection within
+   its gates updates it, no new track) makes it a target again, once per fire; doubted again, it stays so
+   until the end. (search_indoor reports every known track of its floor, hot or not: no such evidence.)
+   Other failures (fire not found, no water
    flows, time-outs) never count: a fire merely not found is not out.
 
 The action results have no structured field for either kind (mbzirc_comm_objs, pinned): the abort text
@@ -35,6 +40,7 @@ from . import constants as C
 # the agents' fixed phrases (leg_guard.py, tasks/cold_check.py NOT_SEEN_HOT)
 LEG_BLOCKED_TEXT = "blocks the leg"
 NOT_SEEN_HOT_TEXT = "not seen hot from the watering pose"
+NO_WATER_TEXT = "no water spent"   # tasks/indoor.py: an abort before any water
 
 LEG_BLOCKED = "leg blocked"
 NOT_SEEN_HOT = "not seen hot"
@@ -44,7 +50,8 @@ def failure_kind(task: str, message: str) -> Optional[str]:
     """LEG_BLOCKED, NOT_SEEN_HOT (only from the extinguish tasks) or None for any other failure."""
     if LEG_BLOCKED_TEXT in message:
         return LEG_BLOCKED
-    if task in (C.EXTINGUISH_FACADE_FIRE, C.EXTINGUISH_INDOOR_FIRE) and NOT_SEEN_HOT_TEXT in message:
+    if task in (C.EXTINGUISH_FACADE_FIRE, C.EXTINGUISH_INDOOR_FIRE) and NOT_SEEN_HOT_TEXT in message \
+            and NO_WATER_TEXT not in message:
         return NOT_SEEN_HOT
     return None
 
@@ -112,13 +119,14 @@ class UnconfirmedFires:
                 f"remains; {again}")
 
     def note_found(self, fire_id: int) -> Optional[str]:
-        """A search reported `fire_id` (hot there, its track near): a misplaced fire found for the first time
-        since is a target again (its count starts again); the log line then."""
-        if not self.search_again(fire_id):
+        """A facade search reported `fire_id` (seen hot at a holder, its track near): a doubted fire is a target
+        again (its count starts again), once per fire; the log line then."""
+        if not self.doubted(fire_id) or fire_id in self.found_again_once:
             return None
+        what = "probably out" if self.probably_out(fire_id) else "misplaced"
         self.found_again_once.add(fire_id)
         del self.aborts[fire_id]
-        return f"fire {fire_id}: misplaced, found again by a search: a target again at its estimate"
+        return f"fire {fire_id}: {what}, found again (hot) by a facade search: a target again at its estimate"
 
     def doubted(self, fire_id: int) -> bool:
         """Probably out or misplaced: no robot is sent to it while other work remains."""

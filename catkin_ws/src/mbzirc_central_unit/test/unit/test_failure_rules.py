@@ -283,8 +283,8 @@ def test_a_misplaced_facade_fire_gets_one_search_again_and_is_then_left_for_the_
 
 def test_an_indoor_fire_never_seen_hot_from_its_watering_pose_is_misplaced_not_probably_out():
     """Same rule indoors (one fact, failure_rules.UnconfirmedFires): 'not seen hot' twice without any water
-    seen going into it hot is a doubted estimate, not a fire out; a room search that finds it again makes it
-    a target again."""
+    seen going into it hot is a doubted estimate, not a fire out. search_indoor reports every known track of
+    its floor, hot or not: its report does not make the fire a target again."""
     s = Strategy(StrategyParams(facade_searches=0))
     for agent in ("3", "2"):
         cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
@@ -296,4 +296,44 @@ def test_an_indoor_fire_never_seen_hot_from_its_watering_pose_is_misplaced_not_p
     assert cmds and not _on_fire(cmds, 18)             # doubted: not a target while other work remains
     s.book.in_flight.clear()
     _searched(s, "2", 2, [18], C.SEARCH_INDOOR, (2, 1))
-    assert _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)   # found again: a target again
+    assert not _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)
+
+
+IN2_W_NO_WATER = ("fire 16 not seen hot from the watering pose: not judged out: hot before aiming at its hot spot, "
+                  "cold after; no water spent")
+
+
+def test_an_indoor_abort_that_spent_no_water_after_seeing_the_fire_hot_does_not_count():
+    """Realistic seed 108 (in2_w): watered hot until the tank ran dry, one top-up 'not seen hot', then a UAV saw
+    it hot, turned to its hot spot and read it cold ('no water spent'): judged probably out, left at 86 %. Seen
+    hot a moment before is no sign of a fire out."""
+    assert failure_kind(C.EXTINGUISH_INDOOR_FIRE, IN2_W_NO_WATER) is None
+    s = Strategy(StrategyParams(facade_searches=0))
+    _watered_hot(s, "3", 16, C.EXTINGUISH_INDOOR_FIRE, 2)
+    for text in (NOT_HOT_INDOORS.replace("18", "16"), IN2_W_NO_WATER):
+        cmd = Command("2", C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 16, "_floor": 2}, "water on fire 16", 16)
+        s.on_sent(cmd)
+        s.on_result(cmd, False, {"message": text, "extinguished": False}, now=0.0)
+    assert not s.probably_out(16)                      # before: probably out
+    import os
+    agents = os.path.join(os.path.dirname(__file__), "..", "..", "..", "mbzirc_agents", "src", "mbzirc_agents")
+    with open(os.path.join(agents, "tasks", "indoor.py"), encoding="utf-8") as f:
+        assert "cold after; no water spent" in f.read()     # the agents' phrase
+
+
+def test_a_facade_fire_probably_out_that_a_facade_search_sees_hot_again_is_a_target_again_once():
+    s = Strategy(StrategyParams(facade_searches=0, indoor_floors=()))
+    _watered_hot(s, "3")
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)
+    assert s.probably_out(7)
+    assert not _on_fire(s.decide(_uav_world()), 7)
+    s.book.in_flight.clear()
+    _searched(s, "2", 1, [7])                          # hot at its holder: not out
+    assert any("fire 7" in n and "found again" in n for n in s.take_notes())
+    facade = _uav_world().fires_of(C.KIND_FACADE)
+    assert not s.probably_out(7) and [f.fire_id for f in s.water._confirmed(facade)] == [5, 7]   # a target again
+    _abort(s, "2", NOT_HOT)
+    _abort(s, "3", NOT_HOT)
+    _searched(s, "2", 1, [7])                          # once only
+    assert s.probably_out(7) and [f.fire_id for f in s.water._confirmed(facade)] == [5]
