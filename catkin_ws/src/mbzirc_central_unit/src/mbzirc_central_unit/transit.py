@@ -39,6 +39,8 @@ class Router:
     def __init__(self, params: StrategyParams, book: Bookkeeping) -> None:
         self.p = params
         self.book = book
+        # agent -> what the strategy's memory held when it was last seen landed with no work left
+        self._landed_for_good: dict[str, tuple] = {}
 
     def own_altitude(self, agent_id: str) -> float:
         """The transit altitude a UAV has while every UAV flies (~altitudes, else base + step per id)."""
@@ -50,19 +52,26 @@ class Router:
             k = 1
         return C.ALTITUDE_BASE + C.ALTITUDE_STEP * max(0, k - 1)
 
+    def _memory_of(self, agent_id: str) -> tuple:
+        """What changes when an agent is given a goal and it ends: its last success, its failures in a row."""
+        return (self.book.last_done.get(agent_id), self.book.consecutive_failures[agent_id])
+
     def grounded_for_good(self, agent_id: str) -> bool:
-        """A UAV that flies no more: crashed, or landed at home for good (its go-home with no work left
-        succeeded and no goal followed)."""
+        """A UAV that flies no more: crashed, or sent home for good and seen landed with no work left, no
+        goal since (however its go-home ended: realistic seed 102, the blanket UAV's was preempted on its
+        pad by a heartbeat loss)."""
         book = self.book
         if agent_id in book.crashed:
             return True
-        done = book.last_done.get(agent_id)
-        return (agent_id in book.finished and agent_id not in book.in_flight and done is not None
-                and done.task == C.GO_HOME_AND_REFILL and done.reason == NO_WORK_LEFT)
+        seen = self._landed_for_good.get(agent_id)
+        now = self._memory_of(agent_id)
+        return (agent_id in book.finished and agent_id not in book.in_flight and seen is not None
+                and seen[0] is now[0] and seen[1] == now[1])
 
     def altitude(self, agent_id: str) -> float:
         """Transit altitude of a UAV: the UAVs that still fly take the lowest of the transit altitudes, one
-        each, in the order of their own (`own_altitude`), so that no two share one outside the building.
+        each, in the order of their own (`own_altitude`), so that no two share one outside the building;
+        a UAV grounded for good (`grounded_for_good`) leaves its layer to the others.
 
         Why: every refill trip climbs to the transit altitude, flies home at it and lands from it (the UAL
         lands at about 0.8 m/s), takes off to it again and changes height in an elevator to the job's floor:
@@ -151,6 +160,8 @@ class Router:
 
     def go_home_for_good(self, a: AgentView) -> Optional[Command]:
         """No work left: go home once and stay landed."""
+        if a.landed and a.agent_id in self.book.finished:
+            self._landed_for_good[a.agent_id] = self._memory_of(a.agent_id)   # its layer is free (altitude)
         if a.landed or a.agent_id in self.book.finished:
             return None
         cmd = self.go_home(a, NO_WORK_LEFT)
