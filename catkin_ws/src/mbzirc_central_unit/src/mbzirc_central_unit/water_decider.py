@@ -81,6 +81,14 @@ class WaterDecider(Decider):
         if here:
             f = nearest(a, here)
             return (C.KIND_INDOOR, f.floor, f)
+        # 0c. a facade floor whose search starts where this UAV just flew to (for that search) is searched
+        #     before any job elsewhere: the flight there took 30-60 s, the search takes 20-60 s and the fire it
+        #     finds is watered at once, tank full (realistic seed 108: UAV 3 reached floor 2's search start
+        #     twice, for the search again of a misplaced fire, and left at once for fires on floor 1 found
+        #     meanwhile; floor 2's fire D_3 was never searched again, 0.0)
+        reached = self._search_just_reached(a, world)
+        if reached is not None:
+            return (C.KIND_FACADE, reached, None)
         # 1. a known facade fire on my floor, then on a floor nobody alive owns (nearest first); fires
         #    doubted (probably out or misplaced, failure_rules.py) only when nothing else is left (4.)
         facade = self._confirmed(world.fires_of(C.KIND_FACADE))
@@ -143,6 +151,23 @@ class WaterDecider(Decider):
                 or not self.owners.free_for(floor, a.agent_id, world):
             return None
         return floor
+
+    def _search_just_reached(self, a: AgentView, world: WorldView) -> Optional[int]:
+        """The facade floor this UAV's last task (a transit to that floor) took it to the start of a search
+        of, while that floor is still to be searched (no known fire there to put out, a search left or one
+        more owed to a misplaced fire: `book.search_again`); None otherwise."""
+        last = self.book.last_done.get(a.agent_id)
+        if last is None or last.task != C.FOLLOW_PATH or not isinstance(last.target, tuple) \
+                or last.target[0] != "transit":
+            return None
+        f = last.target[1]
+        searches = self.book.facade_searches[f]
+        if f not in self.facade_floors_open(world) or self._confirmed(world.fires_of(C.KIND_FACADE, f)) \
+                or not (searches < self.p.facade_searches or f in self.book.search_again) \
+                or not self.owners.free_for(f, a.agent_id, world) or not self.book.ok(a, C.SEARCH_FACADE, f):
+            return None
+        paths = [G.facade_search_path(f, self.p.layout.facade_holders, reverse=r) for r in (False, True)]
+        return f if any(p and at(a, p[0]) for p in paths) else None
 
     def _confirmed(self, fires: list[FireView]) -> list[FireView]:
         """Fires not doubted (probably out or misplaced) after repeated 'not seen hot' aborts (failure_rules.py)."""

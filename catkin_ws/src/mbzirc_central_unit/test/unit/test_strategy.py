@@ -556,3 +556,38 @@ def test_a_fire_seen_through_a_doorway_is_reached_through_the_room_it_is_watered
                     water_level=2.0, last_seen=20.0)
     [cmd] = s.decide(WorldView(20.0, {"2": uav}, {20: fire}))
     assert (cmd.task, cmd.target) == (C.ENTER_BUILDING, (2, 0)), cmd
+
+
+def test_realistic_108_a_facade_floor_reached_for_its_search_is_searched_before_jobs_elsewhere():
+    """Realistic seed 108: facade fire 2 (D_3, floor 2) was misplaced (never seen hot from its watering pose), its
+    floor owed a search again; UAV 3 flew to floor 2's search start for it and, once there, was sent to fires
+    of floor 1 found meanwhile (at 293 s facade fire 33, at 649 s indoor fire 41): D_3 never searched, 0.0."""
+    not_hot = ("fire 2 not seen hot from the watering pose: not judged out: 3 s of water on its hole (seen "
+               "through) without a hot answer there; left active")
+    s = Strategy()
+    for floor in (0, 1, 2):
+        s.book.facade_searches[floor] = 1
+    for agent in ("2", "2"):
+        cmd = Command(agent, C.EXTINGUISH_FACADE_FIRE, {"fire_id": 2, "_floor": 2}, "water on facade fire 2", 2)
+        s.on_sent(cmd)
+        s.on_result(cmd, False, {"message": not_hot})
+    start = G.facade_search_path(2, s.p.layout.facade_holders)[0]
+    a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, *start[:3], ual_state=C.UAL_FLYING_AUTO, water_level=2.0,
+                  last_seen=0.0)
+    fires = {2: FireView(2, 24.2, 17.6, 12.5, C.KIND_FACADE), 33: FireView(33, 24.2, 8.2, 8.25, C.KIND_FACADE),
+             41: FireView(41, 17.7, 8.5, 6.5, C.KIND_INDOOR)}
+    world = WorldView(0.0, {"3": a}, fires)
+    transit = Command("3", C.FOLLOW_PATH, {"path": [start]}, "to floor 2 via the elevator", ("transit", 2))
+    s.on_sent(transit)
+    s.on_result(transit, True, {})
+    [cmd] = s.decide(world)
+    assert (cmd.task, cmd.target) == (C.SEARCH_FACADE, 2), cmd    # before: to facade fire 33, floor 1
+    # no search owed there (searched twice, no misplaced fire): the fires elsewhere come first
+    s2 = Strategy()
+    for floor in (0, 1, 2):
+        s2.book.facade_searches[floor] = 2
+    s2.on_sent(transit)
+    s2.on_result(transit, True, {})
+    fires[2].status = C.STATUS_EXTINGUISHED
+    [cmd] = s2.decide(world)
+    assert cmd.task != C.SEARCH_FACADE and cmd.target == ("transit", 1), cmd
