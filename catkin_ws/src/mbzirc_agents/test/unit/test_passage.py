@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from mbzirc_comm_objs.msg import EnterBuildingGoal, SearchIndoorGoal, TakeOffGoal
+from mbzirc_comm_objs.msg import EnterBuildingGoal, GoToGoal, SearchIndoorGoal, TakeOffGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
@@ -621,14 +621,11 @@ def test_the_passage_reserves_the_way_aside_to_the_opening():
     assert lo[1] <= 11.0 - 1.0 and hi[1] >= 14.5 + 1.0 and lo[0] <= 15.7 - 1.0 and hi[0] >= 22.7 + 1.0
 
 
-def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav):
-    """Realistic seeds 103 and 106: leaving floor 1 from a viewpoint at the fire's height (1.4 m above the
-    floor) for the window's 2.5 m, a diagonal leg took the UAV to the facade's inner face below the sill,
-    its laser plane looking through the window above the wall it hit. The height comes first, where the
-    UAV is; then the leg, in the plane the laser sees."""
-    agent, ual, be, scene = uav
-    ual.pos = np.array([15.7, 10.5, 6.4])                   # a viewpoint on floor 1, west room
-    ual.yaw = -math.pi / 2
+def searched_from(ual, be, pos, yaw, floor, path):
+    """search_indoor along path (goal poses) for a UAV truly at pos (heading yaw) that sees no fire; the
+    UAV's true positions meanwhile (every 0.05 s of sim time), once it succeeded."""
+    ual.pos = np.array(pos, dtype=float)
+    ual.yaw = yaw
     be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
     track, stop = [], []
@@ -639,9 +636,65 @@ def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav)
             be.clock.sleep(0.05)
     be.clock.start_thread(record, name='record')
     s = be.servers['search_indoor_action']
-    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(15.7, 8.9, 7.6, -math.pi / 2)]))
-    assert s.wait(200) == 'succeeded', s.result.message
+    s.send(SearchIndoorGoal(floor=floor, path=path))
+    status = s.wait(200)
     stop.append(True)
+    assert status == 'succeeded', s.result.message
+    return track
+
+
+def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav):
+    """Realistic seeds 103 and 106: leaving floor 1 from a viewpoint at the fire's height (1.4 m above the
+    floor) for the window's 2.5 m, a diagonal leg took the UAV to the facade's inner face below the sill,
+    its laser plane looking through the window above the wall it hit. The height comes first, where the
+    UAV is; then the leg, in the plane the laser sees."""
+    agent, ual, be, scene = uav
+    track = searched_from(ual, be, (15.7, 10.5, 6.4), -math.pi / 2, 1,     # a viewpoint on floor 1, west room
+                          [goal_pose(15.7, 8.9, 7.6, -math.pi / 2)])
     low = [p for p in track if p[2] < 7.6 - 0.3]
     assert low and max(abs(p[1] - 10.5) for p in low) < 0.3, 'moved along the leg before climbing'
     assert abs(ual.pos[2] - 7.6) < 0.2 and abs(ual.pos[1] - 8.9) < 0.3, ual.pos
+
+
+def test_realistic_105_112_a_uav_just_inside_a_window_goes_in_before_going_down(uav):
+    """Realistic seeds 105, 112 (and 103 once): just inside facade B's floor-2 window (the central unit's
+    point 1.5 m in from the outline, 1.3 m off the inner face), the search's first leg went down to its
+    viewpoint's height where the UAV was, its GNSS fix about a metre inwards of the truth: it hit the facade
+    under the sill, which its laser's plane (looking out through the window) never saw. Here the fix is 1 m
+    inwards (more than ~pose_error_margin): the UAV first goes in, at the window's height, to
+    ~frame_radius + ~pose_error_margin + 0.3 m from the inner face by the arena model's outline (and the
+    wall's thickness, less the arrival tolerance), and only then down: its true frame stays clear of the wall
+    under the sill (before: 0.06 m into it)."""
+    agent, ual, be, scene = uav
+    ual.gnss_bias = np.array([0.0, 1.0, 0.0])
+    scene.shift = (0.0, 0.0)
+    track = searched_from(ual, be, (15.0, 7.2, 12.5), math.pi / 2, 2,     # (15.0, 8.2) by its GNSS
+                          [goal_pose(15.7, 8.5, 11.5, 0.0)])
+    under_the_sill = [p for p in track if p[2] + 0.15 - UAV_R < 11.5]     # ual_sim's sphere: 0.15 m up
+    assert under_the_sill and min(p[1] for p in under_the_sill) > 6.9 + UAV_R + 0.05, \
+        min(p[1] for p in under_the_sill)
+    assert abs(ual.pos[2] - 11.5) < 0.2, ual.pos
+
+
+def test_realistic_105_an_indoor_go_to_going_down_beside_a_window_goes_in_first(uav):
+    """Realistic seed 105: from just inside facade B's floor-2 window, a go-to down to fire 27's viewpoint
+    (its 'to its height first' where the UAV was) hit the facade under the sill. The same start as above
+    (GNSS 1 m inwards of the truth), a go_to straight to the viewpoint: in first, then down."""
+    agent, ual, be, scene = uav
+    ual.gnss_bias = np.array([0.0, 1.0, 0.0])
+    scene.shift = (0.0, 0.0)
+    ual.pos = np.array([15.0, 7.2, 12.5])                   # (15.0, 8.2) by its GNSS
+    ual.yaw = math.pi / 2
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    lowest = [np.inf]
+
+    def record():
+        while not scene.stop:
+            if ual.pos[2] + 0.15 - UAV_R < 11.5:
+                lowest[0] = min(lowest[0], float(ual.pos[1]))
+            be.clock.sleep(0.05)
+    be.clock.start_thread(record, name='record')
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=goal_pose(15.7, 8.5, 11.5, 0.0)))
+    assert s.wait(200) == 'succeeded', s.result.message
+    assert lowest[0] > 6.9 + UAV_R + 0.05, lowest[0]

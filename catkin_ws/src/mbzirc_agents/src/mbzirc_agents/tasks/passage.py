@@ -41,7 +41,7 @@ from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
 from ..openings import SeenOpening, find_opening, find_openings, side_clearances
-from .uav_motion import hold_box
+from .uav_motion import facade_room, hold_box, off_the_facades
 
 CENTRED_SCANS = 3          # consecutive centred control steps before going through
 SEARCH_RADIUS = 2.5        # m: an opening further aside than this from the arena model's is not the one
@@ -246,6 +246,17 @@ class LaserPassage:
             # (seen: in at a window's 7.5 m, the interior doorway up to 7.2 m looked like a wall)
             # done at the height: gusts near the tower hold a UAV a few tenths off its set-point sideways
             # (seen: 'down to the leg's height: not there after 21 s (0.3 m left)')
+            # in off the outer walls first (uav_motion.off_the_facades): beside a window the wall under its
+            # sill is under the laser's plane (realistic seeds 105, 112: UAVs hit facade B's inner face there)
+            kept = off_the_facades(here[:3], facade_room(a.p))
+            if math.hypot(kept[0] - here[0], kept[1] - here[1]) > a.p.position_tolerance:
+                true_z = self.height_now()           # the search's legs are flown at true heights
+                z = here[2] if true_z is None else true_z
+                a.backend.loginfo(f'[{self.task.name}] in off the facade first: ({kept[0]:.1f}, {kept[1]:.1f}), '
+                                  f'{facade_room(a.p):.2f} m from the building\'s outline')
+                self.task.call_task_or_raise('move', {'waypoint': ((kept[0], kept[1], z), here[3])},
+                                             'in off the facade first')
+                here = a.position()
             a.move_to(self.task, (here[0], here[1], z_flown), here[3], 'down to the leg\'s height',
                       stop_when=lambda: abs(a.position()[2] - z_flown) <= a.p.position_tolerance)
             self.task.sleep(0.3)                     # a scan at that height
