@@ -26,7 +26,9 @@ Rules:
   its passage is centred by the laser); its path is cut into straight legs, each a line of standable
   cells or of the path's own (`straight_legs`), so that every leg is one the leg guard checks;
 - with a view range, standable cells farther than it from every point the robot looked from count as
-  frontiers too: the laser sees a whole room from its door, the thermal camera a fire only nearer;
+  frontiers too (the laser sees a whole room from its door, the thermal camera a fire only nearer), and,
+  when asked (a UAV, kept off the outline), standable cells within half of it of a laser return (a wall)
+  farther than it from every such point;
 - `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
   UAV in a window's room, which must come back out the same way).
 Pure geometry here (no ROS); the task using it is tasks/explore.py.
@@ -61,6 +63,7 @@ class FloorGrid:
 
     def __init__(self, bounds: Sequence[float], resolution: float = 0.25) -> None:
         self.x0, self.y0, x1, y1 = (float(v) for v in bounds[:4])
+        self.x1, self.y1 = x1, y1            # the footprint's far sides (the grid's last cells may pass them)
         if x1 <= self.x0 or y1 <= self.y0 or resolution <= 0:
             raise ValueError(f'bad footprint {tuple(bounds[:4])} or resolution {resolution}')
         self.res = float(resolution)
@@ -105,14 +108,24 @@ class FloorGrid:
             self.misses[c] = 0
 
     # ---- where the robot may stand ---------------------------------------------------------------------
+    def to_outline(self) -> np.ndarray:
+        """m from each cell's centre to the footprint's outline (0 beyond it). Why: the grid's last cells
+        pass the footprint's far sides by up to a cell; counted from the grid's edge, a cell 0.6 m from the
+        outline was 0.8 m clear (ideal seed 3 with exploration: a UAV sent 0.5 m from the wall beside its
+        window crashed into it)."""
+        xs = self.x0 + (np.arange(self.nx) + 0.5) * self.res
+        ys = self.y0 + (np.arange(self.ny) + 0.5) * self.res
+        dx = np.minimum(xs - self.x0, self.x1 - xs)[:, None]
+        dy = np.minimum(ys - self.y0, self.y1 - ys)[None, :]
+        return np.clip(np.minimum(dx, dy), 0.0, None)
+
     def clearance(self) -> np.ndarray:
         """m from each cell's centre to the nearest occupied cell's centre and to the outline (inf: none)."""
         ii, jj = np.meshgrid(np.arange(self.nx), np.arange(self.ny), indexing='ij')
-        to_outline = np.minimum(np.minimum(ii + 0.5, self.nx - ii - 0.5), np.minimum(jj + 0.5, self.ny - jj - 0.5))
         d2 = np.full((self.nx, self.ny), np.inf)
         for oi, oj in np.argwhere(self.cells == OCCUPIED):
             np.minimum(d2, (ii - oi) ** 2 + (jj - oj) ** 2, out=d2)
-        return np.minimum(np.sqrt(d2), to_outline) * self.res
+        return np.minimum(np.sqrt(d2) * self.res, self.to_outline())
 
     def standable(self, clearance: float, here: Optional[Cell] = None, clear: Optional[np.ndarray] = None) -> np.ndarray:
         """Boolean grid of the free cells at least clearance from every occupied cell and from the outline
@@ -202,7 +215,8 @@ def straight_legs(grid: FloorGrid, ok: np.ndarray, cells: list, ends: Optional[n
 def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min_frontier: int = 3,
                    skip: Iterable = (), sight_of: Optional[Sequence[float]] = None,
                    viewed: Sequence = (), view_range: float = 0.0, pass_clearance: Optional[float] = None,
-                   view_clearance: float = 0.0) -> Optional[list]:
+                   view_clearance: float = 0.0, outline_clearance: float = 0.0,
+                   view_walls: bool = False) -> Optional[list]:
     """The legs [(x, y), ...] to the next viewpoint, or None when no frontier is reachable.
 
     The viewpoint is a frontier's cell (or, with viewed and view_range > 0, a standable cell farther than
@@ -213,7 +227,13 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     noisy returns of its jambs on a 0.25 m grid, and its passage is centred by the laser; a narrow cell
     costs up to NARROW_COST times more, and a leg is a straight line of clear cells or of the path's own.
     skip: (x, y) points neither to choose nor to pass (a blocked leg's end); sight_of: only cells in a
-    straight line of clear cells from this point count."""
+    straight line of clear cells from this point count (the point's own cell counts as clear: it was
+    flown to). Every cell but the robot's own keeps `clearance` from the footprint's outline (a door is
+    not this search's to pass), and outline_clearance when more, whatever the laser sees there (a UAV's laser plane looks out through a window and never sees the wall
+    under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). view_walls
+    (with view_range): cells near laser returns farther than view_range from every viewed point are
+    viewpoints too (near_unviewed_walls): kept off the outline, the standable cells beyond view_range no
+    longer bring the camera near the outer walls."""
     start = grid.cell(here[0], here[1])
     if start is None:
         return None
@@ -221,7 +241,14 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     narrow = clearance if pass_clearance is None else min(pass_clearance, clearance)
     ok = grid.standable(clearance, here=start, clear=clear)
     passable = grid.standable(narrow, here=start, clear=clear)
+    inside = grid.to_outline() >= max(outline_clearance, clearance) - 1e-9   # no doorway to pass there
+    inside[start] = True
+    ok &= inside
+    passable &= inside
     origin = grid.cell(sight_of[0], sight_of[1]) if sight_of is not None else None
+    in_sight = ok.copy()
+    if origin is not None:
+        in_sight[origin] = True
     banned = {grid.cell(p[0], p[1]) for p in skip} - {None, start}
     for c in banned:             # neither a target nor a cell to pass: a leg to it was found blocked
         ok[c] = passable[c] = False
@@ -230,11 +257,13 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     targets = [c for group in frontiers(grid, passable, min_frontier) for c in group]
     if view_range > 0:
         targets += unviewed(grid, passable, viewed, view_range)
+        if view_walls:
+            targets += near_unviewed_walls(grid, passable, viewed, view_range)
     best = None
     for c in set(targets):
         if c not in parent or c in banned or c == start:
             continue
-        if origin is not None and not (ok[origin] and grid.line_free(ok, origin, c)):
+        if origin is not None and not grid.line_free(in_sight, origin, c):
             continue
         rank = (clear[c] < view_clearance, costs[c])
         if best is None or rank < best[0]:
@@ -260,6 +289,28 @@ def unviewed(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: floa
     for v in viewed:
         far &= (xs - v[0]) ** 2 + (ys - v[1]) ** 2 > view_range ** 2
     return [(int(i), int(j)) for i, j in np.argwhere(far)]
+
+
+def near_unviewed_walls(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: float) -> list:
+    """Standable cells within half view_range of an occupied cell that is farther than view_range
+    from every viewed point (x, y): a wall the laser saw, the thermal camera not near enough. Why (ideal
+    seed 3 with exploration, facade A's window of floor 1): a UAV kept off the facades saw the room whole
+    from one look, every standable cell within view_range of it, while the room's far wall, where a fire
+    may be, was 3.9 m away."""
+    occupied = np.argwhere(grid.cells == OCCUPIED)
+    if len(occupied) == 0:
+        return []
+    wx, wy = grid.x0 + (occupied[:, 0] + 0.5) * grid.res, grid.y0 + (occupied[:, 1] + 0.5) * grid.res
+    far = np.ones(len(occupied), dtype=bool)
+    for v in viewed:
+        far &= (wx - v[0]) ** 2 + (wy - v[1]) ** 2 > view_range ** 2
+    ii, jj = np.meshgrid(np.arange(grid.nx), np.arange(grid.ny), indexing='ij')
+    xs, ys = grid.x0 + (ii + 0.5) * grid.res, grid.y0 + (jj + 0.5) * grid.res
+    near = np.zeros_like(ok)
+    reach = (0.5 * view_range) ** 2             # well within: a step that sees more than the one wall cell
+    for x, y in zip(wx[far], wy[far]):
+        near |= (xs - x) ** 2 + (ys - y) ** 2 <= reach
+    return [(int(i), int(j)) for i, j in np.argwhere(near & ok)]
 
 
 __all__ = ['FloorGrid', 'frontiers', 'next_viewpoint', 'straight_legs', 'UNKNOWN', 'FREE', 'OCCUPIED']

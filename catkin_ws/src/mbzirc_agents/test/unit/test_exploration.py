@@ -189,3 +189,28 @@ def test_a_doorway_closed_by_returns_placed_with_a_drifted_pose_opens_again():
     assert grid.cells[grid.cell(*in_doorway)] == FREE
     assert next_viewpoint(grid, here, 0.8, 3, pass_clearance=0.6) is not None
     assert grid.cells[grid.cell(17.8, 12.6)] == OCCUPIED                # the true jamb stays
+
+
+def outline_distance(p):
+    x0, y0, x1, y1 = OUTLINE
+    return min(p[0] - x0, x1 - p[0], p[1] - y0, y1 - p[1])
+
+
+def test_viewpoints_keep_off_the_outline_where_the_laser_looks_out_through_a_window():
+    """Ideal seed 3 with exploration: in through facade A's window of floor 1, the UAV's laser looked out
+    through the window at the looking height (the sill's), the cells up to the outline were free, and the
+    grid's far edge, a cell past the outline, counted as the outline: viewpoints (15.5, 18.6), (15.5, 18.8),
+    0.5 m from the wall's inner face; two UAVs hit the wall under the sill there. Every viewpoint keeps the
+    clearance from the footprint's outline, and a UAV's outline clearance (its facade room) when given;
+    kept that far off, the room's walls still come within the view range (view_walls)."""
+    from laser_world import wall_boxes
+    walls = wall_boxes(7.5) + PLAN_A                   # facade A's window open at the laser's height
+    for sight in (True, False):
+        _, visited = explore(walls, (15.5, 18.0), sight=sight, view_range=3.5, pass_clearance=0.6,
+                             view_clearance=2.0)
+        assert min(outline_distance(v) for v in visited[1:]) >= 0.8 - 1e-6, visited
+    _, visited = explore(walls, (15.5, 17.75), sight=True, view_range=3.5, pass_clearance=0.6,
+                         view_clearance=2.0, outline_clearance=1.75, view_walls=True)
+    assert len(visited) > 1 and min(outline_distance(v) for v in visited) >= 1.75 - 1e-6, visited
+    # kept off the outline, the room's west wall (3.9 m from the first look) still comes within view range
+    assert min(v[0] for v in visited) <= 11.6 + 3.5, visited

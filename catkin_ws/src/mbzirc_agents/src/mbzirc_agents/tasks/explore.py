@@ -44,6 +44,7 @@ from .. import constants as C
 from ..agent_task import TaskError
 from ..exploration import FloorGrid, next_viewpoint
 from ..leg_guard import LegGuard
+from .uav_motion import facade_room, off_the_facades
 
 
 MAX_BLOCKED_LEGS = 6     # legs found blocked before the exploration ends (the laser sees what the grid does not)
@@ -89,10 +90,17 @@ class Exploration:
         if bounds is None:
             raise TaskError(f'exploring floor {floor}: ({here[0]:.1f}, {here[1]:.1f}) is in no building')
         self.grid = FloorGrid(bounds, self.agent.p.explore_resolution)
+        uav = self.agent.ROBOT_TYPE == 'uav'
+        # a UAV keeps its facade room from the outline (uav_motion.facade_room): at the looking height its
+        # laser's plane may look out through a window and never see the wall under the sill
+        self.outline_room = facade_room(self.agent.p) if uav else 0.0
+        # where it explores from: off the facades (a UAV), at the (true) height it came in at
         self.start = tuple(here[:3])
+        if uav:
+            true_z = task.passage.height_now()
+            self.start = (*off_the_facades(here[:3], self.outline_room)[:2], here[2] if true_z is None else true_z)
         # legs and looks at the height fires are expected at (a UAV; a true height, as the search path's)
-        self.z = (ARENA.floor_heights[floor] + EXPECTED_FIRE_HEIGHT if self.agent.ROBOT_TYPE == 'uav'
-                  else self.start[2])
+        self.z = ARENA.floor_heights[floor] + EXPECTED_FIRE_HEIGHT if uav else self.start[2]
         self.visited: list = [self.start]
         self.skip: list = []
         self.looked: list = []       # where it looked around from
@@ -102,6 +110,12 @@ class Exploration:
         a, p = self.agent, self.agent.p
         end = a.backend.now() + p.explore_budget
         sight = self.start if p.explore_in_sight else None
+        if math.dist(self.start[:2], a.position()[:2]) > p.position_tolerance:
+            # off the facades first, at the height it came in at, then down: a UAV going down just inside its
+            # window would go down beside the wall under the sill (ideal seed 3: two UAVs hit it there)
+            self.task.feedback('EXPLORING', f'floor {self.floor}: in off the facades to '
+                                            f'({self.start[0]:.1f}, {self.start[1]:.1f})')
+            self.task.call_task_or_raise('move', {'waypoint': (self.start, None)})
         if abs(self.z - self.start[2]) > p.position_tolerance:
             self.task.feedback('EXPLORING', f'floor {self.floor}: to the looking height {self.z:.1f} m')
             self.task.call_task_or_raise('move', {'waypoint': ((*self.start[:2], self.z), None)})
@@ -111,9 +125,11 @@ class Exploration:
                 break
             legs = next_viewpoint(self.grid, a.position(), p.explore_clearance, p.explore_min_frontier,
                                   self.skip, sight, self.looked, p.explore_view_range,
-                                  pass_clearance=p.explore_pass_clearance, view_clearance=p.explore_view_clearance)
+                                  pass_clearance=p.explore_pass_clearance, view_clearance=p.explore_view_clearance,
+                                  outline_clearance=self.outline_room, view_walls=self.outline_room > 0)
             if legs is None:
-                a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore')
+                a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore '
+                                  f'({len(self.looked)} looks, {len(self.skip) // 2} legs blocked)')
                 break
             if not self.go(legs):
                 continue
@@ -150,7 +166,9 @@ class Exploration:
                 self.task.feedback('EXPLORING', f'floor {self.floor}: to ({x:.1f}, {y:.1f}) leg {i + 1}/{len(legs)}')
                 on_to = self.through((x, y, z))
                 self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
-            except TaskError:
+            except TaskError as e:
+                self.agent.backend.logwarn(f'[{self.task.name}] floor {self.floor}: leg to ({x:.1f}, {y:.1f}): {e}: '
+                                           f'that viewpoint is not chosen again')
                 self.skip += [(x, y), legs[-1]]
                 self.visited.append(tuple(self.agent.position()[:3]))    # where the guard held it
                 self.add_scan()
