@@ -498,10 +498,12 @@ class RingCamera(LevelCamera):
 
 class SideDrift:
     """Once the pump runs: the GNSS error wanders sideways at `rate` m/s up to `limit` m (ual_sim's realistic
-    bias: ~0.18 m in 2 s); the UAL holds its set-point on the fix, so the UAV and its jet move the other way."""
+    bias: ~0.18 m in 2 s); the UAL holds its set-point on the fix, so the UAV and its jet move the other way.
+    axis 0: along x instead (towards the fire's wall at FIRE when rate < 0)."""
 
-    def __init__(self, sc, rate=0.06, limit=0.3):
+    def __init__(self, sc, rate=0.06, limit=0.3, axis=1):
         self.sc, self.rate, self.limit, self.stop, self.started = sc, rate, limit, False, False
+        self.axis = axis
         sc.be.clock.start_thread(self._loop, name='side drift')
 
     def _loop(self):
@@ -511,7 +513,9 @@ class SideDrift:
         self.started, t0 = True, clock.now()
         while not self.stop:
             with ual.lock:
-                ual.gnss_bias = np.array([0.0, min(self.limit, self.rate * (clock.now() - t0)), 0.0])
+                bias = np.zeros(3)
+                bias[self.axis] = math.copysign(min(self.limit, abs(self.rate) * (clock.now() - t0)), self.rate)
+                ual.gnss_bias = bias
             clock.sleep(0.02)
 
 
@@ -932,3 +936,27 @@ def test_realistic_104_the_aims_turns_keep_the_uavs_set_point_while_gusts_push_i
     assert walk < 0.05, f'the set-point walked {walk:.2f} m with the gusts while pumping'
     assert cam.received >= cam.need, f'{cam.received:.2f} s of water in of {cam.need:.2f}: {s.result.message}'
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+
+
+def test_realistic_103_a_uav_its_gnss_drift_takes_towards_the_wall_keeps_its_watering_distance(scenes):
+    """Realistic seed 103 (fd8 run with its bag, /work/evidence/E/103_after): in1_e's first pour, the GNSS error
+    drifted 0.7 m along the wall's normal and took the UAV from 1.5 to 1.0-1.2 m from the wall, where the ring of
+    flames fills the view and the image no longer shows the hole whole: the aim no longer followed it, the jet
+    went 0.2-0.3 m beside and below the hole and the fire stayed at 71 % while the tank ran dry (the wall
+    back-off acts only within ~min_wall_clearance, 1.0 m). Now the set-point steps back along the heading to
+    ~indoor_fire_distance from the wall the laser sees ahead once it is 0.25 m nearer. Before: 1.1 m to the end."""
+    from laser_world import LaserScene
+    sc = scenes(hot_until=30.0)
+    sc.ual.water = 8.0
+    laser = LaserScene(sc.be, sc.ual, noisy=False)
+    laser.boxes = [(4.05, -5.0, 4.25, 5.0)]             # the fire's wall (FIRE at x 4.0), 1.55 m ahead
+    drift = SideDrift(sc, rate=-0.2, limit=0.4, axis=0)   # 103: -0.46 -> +0.23 m along the normal in 7 s
+    sc.threads = (laser, drift)
+    sc.be.clock.sleep(0.5)
+    seen = []
+    sc.be.clock.start_thread(lambda: [seen.append((drift.started, 4.05 - sc.ual.pos[0])) or sc.be.clock.sleep(0.1)
+                                      for _ in range(150)], name='distance')
+    sc.extinguish(timeout=60)
+    late = [d for started, d in seen[-30:] if started]
+    assert drift.started and late, 'the drift never started'
+    assert min(late) >= 1.3, f'{min(late):.2f} m from the wall while watering, after the drift'

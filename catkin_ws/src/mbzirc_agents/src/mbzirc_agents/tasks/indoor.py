@@ -17,7 +17,7 @@ from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from ..leg_guard import LegGuard
-from ..wall_clearance import back_off, stop_short
+from ..wall_clearance import back_off, stop_short, wall_ahead
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .explore import Exploration, footprint_here
@@ -36,6 +36,7 @@ FROZEN_HEIGHT_STEP = 0.02  # m: a frozen aim's height set-point is re-sent when 
 RAW_THERMAL_TOPIC = 'teraranger_evo_thermal/raw_temp_array'   # the thermal camera's 32 x 32 deg C
 LOOK_TURN = 0.5            # rad of a look beside the heading for a fire out of view (the 33 deg view overlaps)
 LOOK_CLIMB = 0.5           # m of a UAV's look above and below the watering height for it
+STANDOFF_SLACK = 0.25      # m nearer than ~indoor_fire_distance to the wall ahead before a UAV steps back to it
 
 
 class Sighting(NamedTuple):
@@ -274,6 +275,34 @@ class ExtinguishIndoorFire(AgentTask):
             self.hold_xy = to[:2].copy()
         a.backend.loginfo_throttle(2.0, f'[{self.name}] a wall nearer than {a.p.min_wall_clearance:.2f} m by '
                                         f'the laser: backing off {math.hypot(off[0], off[1]):.2f} m')
+        return to
+
+    def _keep_watering_distance(self, yaw: float) -> Optional[np.ndarray]:
+        """While watering (UAV): when the laser sees the wall ahead (along heading yaw) STANDOFF_SLACK m or more
+        nearer than ~indoor_fire_distance, the held set-point steps back along the heading by the shortfall;
+        the x, y, z sent, None when nothing moved. Along the heading only, so the jet's spot on the wall stays.
+        Why (realistic seed 103, in1_e's first pour, truth from the run's bag): the GNSS error drifted 0.7 m
+        along the wall's normal and took the UAV from 1.5 to 1.0-1.2 m from the wall, where the ring of flames
+        fills the view and the image no longer shows the hole whole (thermal_contrast.warm_spot): the aim no
+        longer followed it, the jet went 0.2-0.3 m beside and below the hole and the fire stayed at 71 % while
+        the tank ran dry; the wall back-off (`_keep_off_walls`) acts only within ~min_wall_clearance."""
+        a = self.agent
+        if self.hold_xy is None:
+            return None
+        points = self._wall_points()
+        if points is None:
+            return None
+        here = a.position()
+        u = np.array([math.cos(yaw), math.sin(yaw)])
+        want = a.p.indoor_fire_distance
+        wall = wall_ahead(points, here, u, a.p.leg_guard_half_width, want)
+        if wall is None or wall > want - STANDOFF_SLACK:
+            return None
+        self.hold_xy = self.hold_xy - u * (want - wall)
+        to = np.array([self.hold_xy[0], self.hold_xy[1], self._held_z(here)])
+        a.send_waypoint(to[0], to[1], to[2], yaw)
+        a.backend.loginfo_throttle(2.0, f'[{self.name}] the wall ahead {wall:.2f} m away by the laser: stepping '
+                                        f'back {want - wall:.2f} m to {want:.2f} m from it')
         return to
 
     def _clear_of_walls_first(self) -> None:
@@ -587,6 +616,8 @@ class ExtinguishIndoorFire(AgentTask):
                 if not self._heading_at(pose, here):
                     self._turn_in_place(pose[3])                 # turned away: back, where it stands
                 backed = self._keep_off_walls(pose[3])           # last: its set-point is the one held
+                if backed is None:
+                    backed = self._keep_watering_distance(pose[3])
                 if backed is not None:
                     pose[:3] = backed                            # the watering pose moves with it
                 looking = at_pose and self.on_jet                # where it saw the fire hot, the jet on it
