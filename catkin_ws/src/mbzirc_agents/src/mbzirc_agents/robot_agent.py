@@ -851,14 +851,16 @@ class RobotAgent(Agent):
         return float(p[0]), float(p[1])
 
     def idle(self) -> None:
-        """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one; while idle
-        and hovering, step aside when the region manager asked (a robot waits long for our hold)."""
+        """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one, and nothing
+        else; while idle and hovering, step aside when the region manager asked (a robot waits long for our
+        hold)."""
         if self.ROBOT_TYPE != 'uav' or not self.p.use_regions:
             return
         self._idle_step_aside()
-        if self.parked:
-            return
         if self.ual_state not in (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED) or self.pose is None:
+            return
+        self._free_the_boxes_of_flight()
+        if self.parked:
             return
         now = self.backend.now()
         if now - self._last_park_try < 2.0:
@@ -869,6 +871,16 @@ class RobotAgent(Agent):
         # up to parked_height above the ground it stands on, not above its reported (GNSS) height
         box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, self.arena[2] + self.p.parked_height))
         self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
+
+    def _free_the_boxes_of_flight(self) -> None:
+        """A landed idle UAV frees every box but its parked one. Why (realistic seed 102): a landing preempted
+        half-way goes on (the UAL cannot hold a landing), the task ends with its 'land' column and hover box
+        reserved, and the next go-home, finding the UAV landed, skips the landing that would free them: the
+        other UAVs' legs through that column were refused for 230 s."""
+        with self._regions_lock:
+            flying = [label for label in self.held if label != 'parked']
+        for label in flying:
+            self.free(label)
 
     def _idle_step_aside(self) -> None:
         """The step out of a waiting robot's box that the region manager asked of this idle UAV (no task

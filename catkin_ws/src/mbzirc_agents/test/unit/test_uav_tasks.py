@@ -119,6 +119,31 @@ def test_a_go_to_that_fails_in_the_air_leaves_only_a_hover_box(uav):
     assert 'go_to' not in mine and 'hold' in mine, mine
 
 
+def test_a_uav_landed_by_a_preempted_land_holds_only_its_parked_box(uav):
+    """Realistic seed 102 (helper C's run on 4b6320b): the central unit's heartbeat loss preempted UAV 3's
+    landing; the UAL landed it anyway (a landing cannot be held), the task ended with its 'land' column
+    reserved and nothing freed it for 230 s (the next go-home found the UAV landed and skipped the landing
+    that frees it): UAV 2's go-to was refused all that time. Rule: a landed idle UAV holds only its parked box."""
+    agent, ual, be = uav
+    assert take_off(be, 20.0) == 'succeeded'
+    s = be.servers['land_action']
+    s.send(LandGoal())
+    for _ in range(100):
+        be.clock.sleep(0.02)
+        if agent.ual_state == C.UAL_LANDING:
+            break
+    assert agent.ual_state == C.UAL_LANDING
+    s.preempt = True
+    assert s.wait(5) == 'preempted'
+    for _ in range(200):
+        be.clock.sleep(0.1)
+        if agent.ual_state in (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED):
+            break
+    be.clock.sleep(3.0)
+    mine = {label for aid, label in ual.regions.regions() if aid == '2'}
+    assert mine == {'parked'}, mine
+
+
 def test_unknown_fire_id_aborted(uav):
     agent, _, be = uav
     s = be.servers['extinguish_facade_fire_action']
