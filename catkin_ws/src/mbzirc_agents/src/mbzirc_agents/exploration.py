@@ -313,4 +313,45 @@ def near_unviewed_walls(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_
     return [(int(i), int(j)) for i, j in np.argwhere(near & ok)]
 
 
+def wall_bearings(grid: FloorGrid, here: Sequence[float], watched: np.ndarray, view_range: float) -> np.ndarray:
+    """Bearings (rad) from here of the occupied cells within view_range not yet `watched`."""
+    cells = np.argwhere((grid.cells == OCCUPIED) & ~watched)
+    if len(cells) == 0:
+        return np.zeros(0)
+    dx = grid.x0 + (cells[:, 0] + 0.5) * grid.res - here[0]
+    dy = grid.y0 + (cells[:, 1] + 0.5) * grid.res - here[1]
+    near = dx ** 2 + dy ** 2 <= view_range ** 2
+    return np.arctan2(dy[near], dx[near])
+
+
+def headings_to_watch(bearings: np.ndarray, width: float) -> list:
+    """The fewest headings whose views (width rad wide, centred on each) hold every bearing: greedy from
+    the widest gap between bearings round the turn."""
+    if len(bearings) == 0:
+        return []
+    b = np.sort(np.mod(bearings, 2 * math.pi))
+    gaps = np.diff(np.concatenate([b, [b[0] + 2 * math.pi]]))
+    first = (int(np.argmax(gaps)) + 1) % len(b)          # the bearing after the widest gap
+    ordered = np.mod(np.roll(b, -first) - b[first], 2 * math.pi) + b[first]
+    out, k = [], 0
+    while k < len(ordered):
+        out.append(float(ordered[k] + width / 2))
+        k = int(np.searchsorted(ordered, ordered[k] + width, side='right'))
+    return [math.atan2(math.sin(h), math.cos(h)) for h in out]
+
+
+def watch(grid: FloorGrid, watched: np.ndarray, here: Sequence[float], heading: float, fov: float,
+          view_range: float) -> None:
+    """Marks the occupied cells within view_range and fov (rad, both ways half) of heading from here watched."""
+    cells = np.argwhere(grid.cells == OCCUPIED)
+    if len(cells) == 0:
+        return
+    dx = grid.x0 + (cells[:, 0] + 0.5) * grid.res - here[0]
+    dy = grid.y0 + (cells[:, 1] + 0.5) * grid.res - here[1]
+    off = np.arctan2(dy, dx) - heading
+    off = np.arctan2(np.sin(off), np.cos(off))
+    seen = (dx ** 2 + dy ** 2 <= view_range ** 2) & (np.abs(off) <= fov / 2)
+    watched[cells[seen, 0], cells[seen, 1]] = True
+
+
 __all__ = ['FloorGrid', 'frontiers', 'next_viewpoint', 'straight_legs', 'UNKNOWN', 'FREE', 'OCCUPIED']

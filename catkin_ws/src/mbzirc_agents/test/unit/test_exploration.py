@@ -214,3 +214,27 @@ def test_viewpoints_keep_off_the_outline_where_the_laser_looks_out_through_a_win
     assert len(visited) > 1 and min(outline_distance(v) for v in visited) >= 1.75 - 1e-6, visited
     # kept off the outline, the room's west wall (3.9 m from the first look) still comes within view range
     assert min(v[0] for v in visited) <= 11.6 + 3.5, visited
+
+
+def test_a_look_around_turns_only_to_walls_in_range_not_yet_looked_at():
+    """Ideal seed 3 with exploration: at every viewpoint the UAV turned through 12 headings of its 33 deg
+    thermal camera (35-50 s), at viewpoints 0.2-0.5 m apart that looked at the same walls again. A look
+    turns only to the walls its laser sees within the view range that no earlier look held."""
+    from mbzirc_agents.exploration import headings_to_watch, wall_bearings, watch
+    walls = outer_walls() + PLAN_A
+    grid = FloorGrid(OUTLINE, 0.25)
+    here, fov, rng = (15.0, 12.0), math.radians(33.0), 3.5
+    grid.add_scan(here, scan_points(here, walls))
+    watched = np.zeros_like(grid.cells, dtype=bool)
+    bearings = wall_bearings(grid, here, watched, rng)
+    yaws = headings_to_watch(bearings, math.radians(30.0))
+    assert 0 < len(yaws) < 12, yaws
+    for b in bearings:                                  # every wall cell in range is in some look's view
+        assert any(abs(math.remainder(b - y, 2 * math.pi)) <= math.radians(15.0) + 1e-9 for y in yaws), b
+    # the south wall (y 6.9, 5.1 m away) is out of range: no look that way
+    assert all(abs(math.remainder(y + math.pi / 2, 2 * math.pi)) > math.radians(30.0) for y in yaws), yaws
+    for y in yaws:
+        watch(grid, watched, here, y, fov, rng)
+    assert len(wall_bearings(grid, here, watched, rng)) == 0                 # looked at: nothing again
+    near = (15.0, 11.5)
+    assert len(headings_to_watch(wall_bearings(grid, near, watched, rng), math.radians(30.0))) < len(yaws)
