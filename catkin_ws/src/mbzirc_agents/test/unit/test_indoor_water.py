@@ -960,3 +960,23 @@ def test_realistic_103_a_uav_its_gnss_drift_takes_towards_the_wall_keeps_its_wat
     late = [d for started, d in seen[-30:] if started]
     assert drift.started and late, 'the drift never started'
     assert min(late) >= 1.3, f'{min(late):.2f} m from the wall while watering, after the drift'
+
+
+def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside_the_view(scenes):
+    """Realistic seed 105 (A's run on f622e84): a top-up of a fire at 98 % (too faint for the raw image) looked
+    around, turned 43 deg onto a warm area 5 degC over its wall (a wall's feature, not the fire), locked it as
+    hot and poured its whole tank there. A warm area found beside the view counts only when it stands clearly
+    over its wall (LOOK_MIN_RISE x ~out_contrast); the top-up then goes where the watering pose faces. Before:
+    the UAV turned onto it (0.5 rad)."""
+    sc = scenes(hot_until=0.0)
+    rng = np.random.default_rng(7)
+    yaw0 = []
+
+    def frame():                         # a faint warm area 0.5 rad right of the first heading, nothing else
+        if not yaw0:
+            yaw0.append(sc.ual.yaw)
+        return frame_at(5.0, -0.5 - (sc.ual.yaw - yaw0[0]), 0.0, rng)
+    sc.ual.thermal = frame
+    sc.extinguish(timeout=60)
+    assert yaw0 and abs(math.remainder(sc.ual.yaw - yaw0[0], 2 * math.pi)) < 0.05, \
+        f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a faint warm area'

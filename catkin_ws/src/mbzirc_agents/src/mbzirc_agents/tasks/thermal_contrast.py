@@ -214,13 +214,13 @@ class FireContrast:
             self.locked_contrast = contrast(self.frame, masks)
             return True
 
-    def warm_spot(self) -> Optional[tuple]:
+    def warm_spot(self, min_rise: float = LOCK_MIN_RISE) -> Optional[tuple]:
         """(column, row, frame time, whole) of the fire's centre in the latest recent frame (module
-        `warm_spot`, its warm core standing LOCK_MIN_RISE x ~out_contrast over its wall), None without one."""
+        `warm_spot`, its warm core standing min_rise x ~out_contrast over its wall), None without one."""
         with self.lock:
             if self.frame is None or self.now() - self.frame_time > MAX_AGE:
                 return None
-            spot = warm_spot(self.frame, LOCK_MIN_RISE * self.out_contrast)
+            spot = warm_spot(self.frame, min_rise * self.out_contrast)
             return None if spot is None else (spot[0], spot[1], self.frame_time, spot[2])
 
     @property
