@@ -698,3 +698,33 @@ def test_realistic_105_an_indoor_go_to_going_down_beside_a_window_goes_in_first(
     s.send(GoToGoal(waypoint=goal_pose(15.7, 8.5, 11.5, 0.0)))
     assert s.wait(200) == 'succeeded', s.result.message
     assert lowest[0] > 6.9 + UAV_R + 0.05, lowest[0]
+
+
+def test_realistic_108_a_uav_ending_an_indoor_leg_near_a_wall_by_its_gnss_error_backs_off_it(uav):
+    """Realistic seed 108 (a run on be39635): UAV 2 flew an indoor leg on floor 1 to room 0's first
+    waypoint (15.7, 8.5, 6.2), 1.6 m off facade B's inner face by GNSS, under no window: the leg ended with
+    no guard stop (the wall beside it, out of the leg's corridor) and 5 s later, looking around there, the UAV
+    hit the wall at (16.0, 7.25): its GNSS error towards the facade was ~1.25 m by then. The laser saw that
+    wall all along. Rule: an indoor leg that ends nearer a wall than ~min_wall_clearance by the laser backs
+    off it, whatever the GNSS says."""
+    agent, ual, be, scene = uav
+    ual.gnss_bias = np.array([0.0, 0.9, 0.0])
+    scene.shift = (0.0, 0.0)
+    ual.pos = np.array([13.0, 7.6, 6.2])                    # (13.0, 8.5) by its GNSS
+    ual.yaw = 0.0
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    nearest = [np.inf]
+
+    def record():
+        while not scene.stop:
+            nearest[0] = min(nearest[0], float(ual.pos[1]) - 6.9)
+            be.clock.sleep(0.05)
+    be.clock.start_thread(record, name='record')
+    s = be.servers['go_to_action']
+    s.send(GoToGoal(waypoint=goal_pose(15.7, 8.5, 6.2, 0.0)))
+    assert s.wait(200) == 'succeeded', s.result.message
+    for _ in range(50):                      # the error drifts on towards the facade while the UAV holds
+        ual.gnss_bias = ual.gnss_bias + np.array([0.0, 0.009, 0.0])
+        be.clock.sleep(0.1)
+    assert nearest[0] > UAV_R + 0.1, nearest[0]
+    assert float(ual.pos[1]) - 6.9 > UAV_R + 0.3, ual.pos

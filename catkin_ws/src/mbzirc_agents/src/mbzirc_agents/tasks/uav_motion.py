@@ -18,6 +18,7 @@ from mbzirc_arena.routing import plan_2d
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..leg_guard import LegGuard
+from ..wall_clearance import back_off
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
@@ -215,6 +216,8 @@ class GoTo(AgentTask):
                     self._in_off_the_facades(what)
                     self._height_first(leg[2], what)
                 self.guard.move(leg, leg_yaw, what)
+                if start_in and target_in:
+                    self._off_the_walls(what)
             else:
                 a.move_to(self, leg, leg_yaw, what)
             a.reserve(self, 'hold', hold_box(a, a.position()))
@@ -241,6 +244,27 @@ class GoTo(AgentTask):
         kept = self._off_the_facades(here[:3], 'here')
         if math.hypot(kept[0] - here[0], kept[1] - here[1]) > self.agent.p.position_tolerance:
             self.guard.move(kept, here[3], f'{what}: in off the facade first')
+
+    def _off_the_walls(self, what: str) -> None:
+        """Indoors, at a leg's end: back off (wall_clearance.back_off) from the walls the laser sees nearer than
+        ~min_wall_clearance, whatever the GNSS says. Why (realistic seed 108, on be39635): a leg on floor 1
+        ended 1.6 m off facade B's inner face by GNSS, truly ~0.7 m (the wall beside the leg, out of the leg
+        guard's corridor); the GNSS error grew on towards the facade while the UAV looked around there and it
+        hit the wall 5 s later. The laser saw that wall all along."""
+        a = self.agent
+        if not a.p.wall_clearance:
+            return
+        points = self.guard.points()
+        if points is None:
+            return
+        here = a.position()
+        off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
+        if off is None:
+            return
+        to = (here[0] + off[0], here[1] + off[1], here[2])
+        a.backend.logwarn(f'[{self.name}] {what}: a wall nearer than {a.p.min_wall_clearance:.2f} m by the laser: '
+                          f'backing off {math.hypot(off[0], off[1]):.2f} m to {_fmt(to)}')
+        a.move_to(self, to, here[3], f'{what}: off the wall')
 
     def _height_first(self, z: float, what: str) -> None:
         """Indoors, up or down to the leg's height where the UAV is, before going along it: the laser's plane
