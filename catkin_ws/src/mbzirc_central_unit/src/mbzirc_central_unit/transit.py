@@ -14,7 +14,6 @@ from .world_model import AgentView, FireView
 
 MIN_TRANSIT_Z = 1.5  # m: a transit starting lower climbs straight up to this first
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
-NO_WORK_LEFT = "no work left"  # the reason of the go-home for good
 
 
 def near_building(a: AgentView, distance: float = C.ELEVATOR_MARGIN - 1.0) -> bool:
@@ -39,11 +38,9 @@ class Router:
     def __init__(self, params: StrategyParams, book: Bookkeeping) -> None:
         self.p = params
         self.book = book
-        # agent -> what the strategy's memory held when it was last seen landed with no work left
-        self._landed_for_good: dict[str, tuple] = {}
 
-    def own_altitude(self, agent_id: str) -> float:
-        """The transit altitude a UAV has while every UAV flies (~altitudes, else base + step per id)."""
+    def altitude(self, agent_id: str) -> float:
+        """Transit altitude of a UAV: its own, so that no two UAVs share one outside the building."""
         if agent_id in self.p.altitudes:
             return float(self.p.altitudes[agent_id])
         try:
@@ -51,39 +48,6 @@ class Router:
         except ValueError:
             k = 1
         return C.ALTITUDE_BASE + C.ALTITUDE_STEP * max(0, k - 1)
-
-    def _memory_of(self, agent_id: str) -> tuple:
-        """What changes when an agent is given a goal and it ends: its last success, its failures in a row."""
-        return (self.book.last_done.get(agent_id), self.book.consecutive_failures[agent_id])
-
-    def grounded_for_good(self, agent_id: str) -> bool:
-        """A UAV that flies no more: crashed, or sent home for good and seen landed with no work left, no
-        goal since (however its go-home ended: realistic seed 102, the blanket UAV's was preempted on its
-        pad by a heartbeat loss)."""
-        book = self.book
-        if agent_id in book.crashed:
-            return True
-        seen = self._landed_for_good.get(agent_id)
-        now = self._memory_of(agent_id)
-        return (agent_id in book.finished and agent_id not in book.in_flight and seen is not None
-                and seen[0] is now[0] and seen[1] == now[1])
-
-    def altitude(self, agent_id: str) -> float:
-        """Transit altitude of a UAV: the UAVs that still fly take the lowest of the transit altitudes, one
-        each, in the order of their own (`own_altitude`), so that no two share one outside the building;
-        a UAV grounded for good (`grounded_for_good`) leaves its layer to the others.
-
-        Why: every refill trip climbs to the transit altitude, flies home at it and lands from it (the UAL
-        lands at about 0.8 m/s), takes off to it again and changes height in an elevator to the job's floor:
-        at 12 m instead of 8 m that is ~15 s more per trip (realistic seed 102: UAV 3 at 12 m, its refill
-        trips 48-90 s, take-off 11 s and landing 15 s each, long after the blanket UAV had landed for good at
-        184 s, its 4 m unused). A UAV that flies again takes its layer back; the others move up at their
-        next transit (the region manager keeps them apart meanwhile)."""
-        ids = set(self.p.altitudes) | {agent_id}
-        layers = sorted(self.own_altitude(i) for i in ids)
-        flying = sorted((i for i in ids if i == agent_id or not self.grounded_for_good(i)),
-                        key=lambda i: (self.own_altitude(i), i))
-        return layers[flying.index(agent_id)]
 
     def transit(self, a: AgentView, target: Sequence[float], reason: str, floor: Optional[int]) -> Command:
         """follow_path from where the agent is to `target`, around the building and, to change altitude,
@@ -160,11 +124,9 @@ class Router:
 
     def go_home_for_good(self, a: AgentView) -> Optional[Command]:
         """No work left: go home once and stay landed."""
-        if a.landed and a.agent_id in self.book.finished:
-            self._landed_for_good[a.agent_id] = self._memory_of(a.agent_id)   # its layer is free (altitude)
         if a.landed or a.agent_id in self.book.finished:
             return None
-        cmd = self.go_home(a, NO_WORK_LEFT)
+        cmd = self.go_home(a, "no work left")
         if cmd.task == C.GO_HOME_AND_REFILL:
             self.book.finished.add(a.agent_id)
         return cmd
