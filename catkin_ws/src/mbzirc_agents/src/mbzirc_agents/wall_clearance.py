@@ -68,4 +68,16 @@ def back_off(points: np.ndarray, here: Sequence[float], min_clearance: float,
     return -towards / norm * (min_clearance + margin - nearest)
 
 
-__all__ = ['back_off', 'stop_short', 'wall_ahead']
+def off_the_walls(points: Optional[np.ndarray], here: Sequence[float], min_clearance: float,
+                  margin: float) -> Optional[tuple]:
+    """The (x, y, z) to hold instead of here (x, y, z, ...) when the walls in points are nearer than
+    min_clearance (back_off); None when here keeps it, or without a scan."""
+    if points is None:
+        return None
+    off = back_off(points, here, min_clearance, margin)
+    if off is None:
+        return None
+    return (float(here[0] + off[0]), float(here[1] + off[1]), float(here[2]))
+
+
+__all__ = ['back_off', 'off_the_walls', 'stop_short', 'wall_ahead']

@@ -17,7 +17,7 @@ from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from ..leg_guard import LegGuard
-from ..wall_clearance import back_off, stop_short, wall_ahead
+from ..wall_clearance import off_the_walls, stop_short, wall_ahead
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .explore import Exploration, footprint_here
@@ -156,11 +156,27 @@ class SearchIndoor(AgentTask):
             yaws, each = [base + k * math.pi / 2 for k in range(4)], 2.0
         for k, y in enumerate(yaws):
             self.feedback('LOOKING', f'waypoint {i + 1}/{n}: looking {k + 1}/{len(yaws)}')
+            p = self._off_the_walls(p)
             a.move_to(self, p[:3], y, 'turning')
             found = self._look_once(floor, each)
             if found:
                 return found
         return self._fires(floor)
+
+    def _off_the_walls(self, p):
+        """p, or the place off the walls the laser sees nearer than ~min_wall_clearance (a UAV, indoors).
+        Why (realistic seed 108): UAV 2 looking around at room 0's first waypoint hit facade B's inner face 5 s
+        after arriving, its GNSS error growing towards the facade; each heading of a look holds ~2-4 s."""
+        a = self.agent
+        if a.ROBOT_TYPE != 'uav' or not a.p.wall_clearance or footprint_here(a.position()) is None:
+            return p
+        here = a.position()
+        to = off_the_walls(self.scans.points(), here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
+        if to is None:
+            return p
+        a.backend.logwarn(f'[{self.name}] looking: a wall nearer than {a.p.min_wall_clearance:.2f} m by the laser: '
+                          f'backing off {math.dist(to[:2], here[:2]):.2f} m')
+        return (*to, p[3])
 
     def _look_once(self, floor: int, seconds: float) -> list:
         """One look the way the robot faces: the floor's fire ids once the estimator has a track of a fire
@@ -263,19 +279,16 @@ class ExtinguishIndoorFire(AgentTask):
         """Back off (heading yaw) from walls nearer than ~min_wall_clearance by the laser; the x, y, z sent,
         None when the robot is clear (or unchecked)."""
         a = self.agent
-        points = self._wall_points()
-        if points is None:
-            return None
         here = a.position()
-        off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
+        off = off_the_walls(self._wall_points(), here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
         if off is None:
             return None
-        to = np.array([here[0] + off[0], here[1] + off[1], self._held_z(here)])
+        to = np.array([off[0], off[1], self._held_z(here)])
         a.send_waypoint(to[0], to[1], to[2], yaw)
         if self.hold_xy is not None:
             self.hold_xy = to[:2].copy()
         a.backend.loginfo_throttle(2.0, f'[{self.name}] a wall nearer than {a.p.min_wall_clearance:.2f} m by '
-                                        f'the laser: backing off {math.hypot(off[0], off[1]):.2f} m')
+                                        f'the laser: backing off {math.dist(to[:2], here[:2]):.2f} m')
         return to
 
     def _keep_watering_distance(self, yaw: float) -> Optional[np.ndarray]:

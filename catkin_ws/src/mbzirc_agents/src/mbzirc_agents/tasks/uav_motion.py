@@ -18,7 +18,7 @@ from mbzirc_arena.routing import plan_2d
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..leg_guard import LegGuard
-from ..wall_clearance import back_off
+from ..wall_clearance import off_the_walls
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
@@ -254,16 +254,12 @@ class GoTo(AgentTask):
         a = self.agent
         if not a.p.wall_clearance:
             return
-        points = self.guard.points()
-        if points is None:
-            return
         here = a.position()
-        off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
-        if off is None:
+        to = off_the_walls(self.guard.points(), here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
+        if to is None:
             return
-        to = (here[0] + off[0], here[1] + off[1], here[2])
         a.backend.logwarn(f'[{self.name}] {what}: a wall nearer than {a.p.min_wall_clearance:.2f} m by the laser: '
-                          f'backing off {math.hypot(off[0], off[1]):.2f} m to {_fmt(to)}')
+                          f'backing off {math.dist(to[:2], here[:2]):.2f} m to {_fmt(to)}')
         a.move_to(self, to, here[3], f'{what}: off the wall')
 
     def _height_first(self, z: float, what: str) -> None:
