@@ -700,6 +700,30 @@ def test_realistic_105_an_indoor_go_to_going_down_beside_a_window_goes_in_first(
     assert lowest[0] > 6.9 + UAV_R + 0.05, lowest[0]
 
 
+FACADE_B_INNER_Y = 6.9       # facade B's inner face (laser_world: 0.2 m inside the outline)
+
+
+def beside_facade_b(be, ual, scene, true_pos, bias_y, drift_to=None):
+    """The UAV at true_pos (floor 1, GNSS bias_y m north of the truth, towards the room), after the pose-jump
+    doubt; a thread records its least distance to facade B's inner face ([m]) and, with drift_to, moves the
+    error on by 0.1 m/s up to drift_to (the UAL holding its GNSS set-point: the UAV towards the facade)."""
+    ual.gnss_bias = np.array([0.0, bias_y, 0.0])
+    scene.shift = (0.0, 0.0)
+    ual.pos = np.array(true_pos, dtype=float)
+    ual.yaw = 0.0
+    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
+    nearest = [np.inf]
+
+    def drift_and_record():
+        while not scene.stop:
+            nearest[0] = min(nearest[0], float(ual.pos[1]) - FACADE_B_INNER_Y)
+            if drift_to is not None and ual.gnss_bias[1] < drift_to:
+                ual.gnss_bias = ual.gnss_bias + np.array([0.0, 0.005, 0.0])
+            be.clock.sleep(0.05)
+    be.clock.start_thread(drift_and_record, name='drift')
+    return nearest
+
+
 def test_realistic_108_a_uav_ending_an_indoor_leg_near_a_wall_by_its_gnss_error_backs_off_it(uav):
     """Realistic seed 108 (a run on be39635): UAV 2 flew an indoor leg on floor 1 to room 0's first
     waypoint (15.7, 8.5, 6.2), 1.6 m off facade B's inner face by GNSS, under no window: the leg ended with
@@ -708,18 +732,7 @@ def test_realistic_108_a_uav_ending_an_indoor_leg_near_a_wall_by_its_gnss_error_
     wall all along. Rule: an indoor leg that ends nearer a wall than ~min_wall_clearance by the laser backs
     off it, whatever the GNSS says."""
     agent, ual, be, scene = uav
-    ual.gnss_bias = np.array([0.0, 0.9, 0.0])
-    scene.shift = (0.0, 0.0)
-    ual.pos = np.array([13.0, 7.6, 6.2])                    # (13.0, 8.5) by its GNSS
-    ual.yaw = 0.0
-    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
-    nearest = [np.inf]
-
-    def record():
-        while not scene.stop:
-            nearest[0] = min(nearest[0], float(ual.pos[1]) - 6.9)
-            be.clock.sleep(0.05)
-    be.clock.start_thread(record, name='record')
+    nearest = beside_facade_b(be, ual, scene, (13.0, 7.6, 6.2), 0.9)    # (13.0, 8.5) by its GNSS
     s = be.servers['go_to_action']
     s.send(GoToGoal(waypoint=goal_pose(15.7, 8.5, 6.2, 0.0)))
     assert s.wait(200) == 'succeeded', s.result.message
@@ -727,7 +740,7 @@ def test_realistic_108_a_uav_ending_an_indoor_leg_near_a_wall_by_its_gnss_error_
         ual.gnss_bias = ual.gnss_bias + np.array([0.0, 0.009, 0.0])
         be.clock.sleep(0.1)
     assert nearest[0] > UAV_R + 0.1, nearest[0]
-    assert float(ual.pos[1]) - 6.9 > UAV_R + 0.3, ual.pos
+    assert float(ual.pos[1]) - FACADE_B_INNER_Y > UAV_R + 0.3, ual.pos
 
 
 def test_realistic_108_a_uav_looking_around_indoors_keeps_off_the_wall_its_gnss_error_drifts_towards(uav):
@@ -737,20 +750,8 @@ def test_realistic_108_a_uav_looking_around_indoors_keeps_off_the_wall_its_gnss_
     sees nearer than ~min_wall_clearance."""
     agent, ual, be, scene = uav
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
-    ual.gnss_bias = np.array([0.0, 0.4, 0.0])
-    scene.shift = (0.0, 0.0)
-    ual.pos = np.array([14.0, 8.1, 6.2])                    # (14.0, 8.5) by its GNSS, 1.2 m off the face
-    ual.yaw = 0.0
-    be.clock.sleep(4.0)                      # a jump of the pose is doubted for ~pose_jump_hold s
-    nearest = [np.inf]
-
-    def drift_and_record():
-        while not scene.stop:
-            nearest[0] = min(nearest[0], float(ual.pos[1]) - 6.9)
-            if ual.gnss_bias[1] < 1.3:       # 0.9 m more towards the facade within ~9 s of the look
-                ual.gnss_bias = ual.gnss_bias + np.array([0.0, 0.005, 0.0])
-            be.clock.sleep(0.05)
-    be.clock.start_thread(drift_and_record, name='drift')
+    # (14.0, 8.5) by its GNSS, 1.2 m off the face; 0.9 m more error towards it within ~9 s of the look
+    nearest = beside_facade_b(be, ual, scene, (14.0, 8.1, 6.2), 0.4, drift_to=1.3)
     s = be.servers['search_indoor_action']
     s.send(SearchIndoorGoal(floor=1, path=[goal_pose(14.0, 8.5, 6.2)]))
     assert s.wait(200) == 'succeeded', s.result.message
