@@ -102,6 +102,30 @@ def test_landings_again_are_bounded_then_the_task_fails():
         stop_agent(agent, ual, be)
 
 
+def test_a_uav_landed_off_its_pad_after_a_failed_refill_takes_off_to_land_on_it_when_asked_again():
+    """Realistic seed 105 (benchmark on 5882eb8): UAV 2 landed three times off its pad by its GNSS error, no
+    reset came, go_home_and_refill timed out; its error then shrank, so its GNSS put it (truly) 1.5+ m off
+    home, and every later go_home_and_refill was refused at once, 'landed away from home: take off first':
+    the central unit counted it broken and it stood there from 490 s to the end (one water UAV of two). Rule:
+    going home, a UAV landed away from home takes off and lands on its pad again itself."""
+    be = FakeBackend()
+    agent, ual = start_uav(be, {'reland_attempts': 1, 'refill_timeout': 10.0}, speedup=4.0)
+    reset = Reset(be, ual)
+    try:
+        wander(be, ual, (1.8, 0.0, 0.0), (0.0, 0.0, 0.0), after_landings=2, reset=reset)
+        fly_out(be, ual)
+        s = be.servers['go_home_and_refill_action']
+        s.send(GoHomeAndRefillGoal())
+        assert s.wait(400) == 'aborted', s.result.message
+        assert np.linalg.norm(agent.position()[:2] - HOME) > 1.5, agent.position()
+        s.send(GoHomeAndRefillGoal())
+        assert s.wait(400) == 'succeeded', s.result.message
+        assert reset.landings[-1] <= PAD_RADIUS, reset.landings
+    finally:
+        reset.stop = True
+        stop_agent(agent, ual, be)
+
+
 def test_the_landing_is_aimed_off_the_pad_away_from_the_neighbours_pads():
     """Realistic seeds 104-107: UAVs landing on GNSS beside a neighbour's pad (2.6 m away) came down ~1 m
     from it. Robot 2 (pad (0, 0); pads (-2, 1.65) and (0, 3.3) beside it) now aims ~home_landing_offset

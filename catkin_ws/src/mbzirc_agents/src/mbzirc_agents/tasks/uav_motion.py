@@ -343,6 +343,7 @@ class GoHomeAndRefill(AgentTask):
     pad: no reset within ~reland_after s -> take off ~reland_height and land on the pad again (the GNSS
     error has moved since), at most ~reland_attempts times; then the ~refill_timeout wait, and failure
     (seen: realistic seed 102, the blanket UAV 1.3-1.5 m off its pad waited for a blanket the whole trial).
+    Started landed away from home (after such a failure), it takes off and lands on the pad first.
     The aimed point is ~home_landing_offset m off the pad's centre, away from the other UAVs' pads
     (landing_spot): the neighbours' GNSS errors then leave them further apart.
     """
@@ -355,7 +356,12 @@ class GoHomeAndRefill(AgentTask):
         if a.ual_state in FLYING:
             self._fly_home_and_land(home)
         elif math.hypot(a.position()[0] - home[0], a.position()[1] - home[1]) > C.HOME_PAD_RADIUS:
-            raise TaskError('landed away from home: take off first')
+            # landed away from home (a refill that timed out off the pad, its GNSS error moved since): the
+            # way home is this task's, not the caller's. Why (realistic seed 105): refused at once each time
+            # ('take off first'), UAV 2 was counted broken and stood there from 490 s to the end
+            self.feedback('RELANDING', 'landed away from home: taking off to land on the pad')
+            self.call_task_or_raise('take_off', {'height': a.p.reland_height}, 'taking off to go home')
+            self._fly_home_and_land(home)
         if a.p.payload == 'water':
             full = 0.95 * a.p.tank_capacity
             refilled, what = (lambda: a.water_level >= full), 'the tank to be refilled'
