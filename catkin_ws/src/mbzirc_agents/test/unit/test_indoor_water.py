@@ -875,7 +875,7 @@ def test_the_frozen_aim_never_turns_on_a_fire_cut_by_the_frames_edge(scenes):
 
 @pytest.mark.parametrize('bias', [(0.0, -0.9, 0.0), (0.0, 0.9, 0.0), (0.0, 0.0, 0.75)])
 def test_realistic_103_a_fire_out_of_the_view_from_the_watering_pose_is_looked_for_around_it(scenes, bias):
-    """Realistic seed 103 (fd8 run, /work/evidence/E/103): UAV 2, sent to top up in1_e, reached the watering
+    """Realistic seed 103 (fd8 run, run 103): UAV 2, sent to top up in1_e, reached the watering
     pose its GNSS fix and the fire's track put 1.5 m in front of it, read the fire cold there twice (detector
     and raw image) and pumped 1.27 L beside it while it was burning at 0 % (no lock on a warm area: it was not
     in the 33 deg view). The track's and the robot's GNSS errors (0.5 m per axis each, 0.4 m in height)
@@ -911,7 +911,7 @@ class Wobble:
 
 
 def test_realistic_104_the_aims_turns_keep_the_uavs_set_point_while_gusts_push_it_about(scenes):
-    """Realistic seed 104 (fd8 run with its bag, /work/evidence/E/104): on floor 1 the gusts push a UAV
+    """Realistic seed 104 (fd8 run with its bag, run 104): on floor 1 the gusts push a UAV
     +-0.2-0.3 m about its set-point within a second; every turn of the aim (and every re-sent height of a
     frozen aim) sent the fix of that moment as the new set-point, so that the set-point walked with the gusts:
     in1_w's first pour, 14 turns, the UAV 0.6 m off where it started, the jet 0.2-0.4 m beside the hole for
@@ -939,7 +939,7 @@ def test_realistic_104_the_aims_turns_keep_the_uavs_set_point_while_gusts_push_i
 
 
 def test_realistic_103_a_uav_its_gnss_drift_takes_towards_the_wall_keeps_its_watering_distance(scenes):
-    """Realistic seed 103 (fd8 run with its bag, /work/evidence/E/103_after): in1_e's first pour, the GNSS error
+    """Realistic seed 103 (fd8 run with its bag, run 103_after): in1_e's first pour, the GNSS error
     drifted 0.7 m along the wall's normal and took the UAV from 1.5 to 1.0-1.2 m from the wall, where the ring of
     flames fills the view and the image no longer shows the hole whole: the aim no longer followed it, the jet
     went 0.2-0.3 m beside and below the hole and the fire stayed at 71 % while the tank ran dry (the wall
