@@ -1,6 +1,7 @@
 """go_home_and_refill against the fake UAL, with the competition's reset as the test's rule: a full tank
 after RESET_TIME s landed within PAD_RADIUS of the robot's home pad (true position). The landing is flown on
 GNSS, whose error moves the robot off the pad."""
+import contextlib
 import threading
 
 import numpy as np
@@ -46,6 +47,19 @@ def fly_out(be, ual):
     ual.water = 0.3
 
 
+@contextlib.contextmanager
+def refill_scene(params=None):
+    """Robot 2 (params for its agent) with the test's reset rule; stopped at the end whatever happens."""
+    be = FakeBackend()
+    agent, ual = start_uav(be, params or {}, speedup=4.0)
+    reset = Reset(be, ual)
+    try:
+        yield be, agent, ual, reset
+    finally:
+        reset.stop = True
+        stop_agent(agent, ual, be)
+
+
 def wander(be, ual, start, end, after_landings, reset, seconds=10.0):
     """The GNSS bias is start (set before the take-off: a step later is a pose jump, which the agent
     doubts) and moves to end over `seconds` once the robot has landed after_landings times."""
@@ -67,10 +81,7 @@ def test_a_uav_landed_off_its_pad_by_its_gnss_error_lands_on_it_again():
     """Realistic seed 102: the blanket UAV landed 1.3-1.5 m off its pad (GNSS) and waited for the reset
     the whole trial. Here it lands 1.8 m off; the error then moves to 0.3 m: no reset within ~reland_after
     s -> it takes off and lands again, on the pad this time, and is refilled."""
-    be = FakeBackend()
-    agent, ual = start_uav(be, speedup=4.0)
-    reset = Reset(be, ual)
-    try:
+    with refill_scene() as (be, agent, ual, reset):
         wander(be, ual, (1.8, 0.0, 0.0), (0.3, 0.0, 0.0), after_landings=1, reset=reset)
         fly_out(be, ual)
         s = be.servers['go_home_and_refill_action']
@@ -79,27 +90,18 @@ def test_a_uav_landed_off_its_pad_by_its_gnss_error_lands_on_it_again():
         assert reset.landings[0] > PAD_RADIUS and reset.landings[-1] <= PAD_RADIUS, reset.landings
         assert len(reset.landings) == 2 and reset.take_offs == 2, (reset.landings, reset.take_offs)
         assert any('landing on it again' in m for m in be.warns), be.warns
-    finally:
-        reset.stop = True
-        stop_agent(agent, ual, be)
 
 
 def test_landings_again_are_bounded_then_the_task_fails():
     """An error that stays 1.8 m: ~reland_attempts landings again, then the ~refill_timeout wait, then a
     failure the central unit sees (not a wait for ever)."""
-    be = FakeBackend()
-    agent, ual = start_uav(be, {'reland_attempts': 1, 'refill_timeout': 10.0}, speedup=4.0)
-    reset = Reset(be, ual)
-    try:
+    with refill_scene({'reland_attempts': 1, 'refill_timeout': 10.0}) as (be, agent, ual, reset):
         ual.gnss_bias = np.array((1.8, 0.0, 0.0))
         fly_out(be, ual)
         s = be.servers['go_home_and_refill_action']
         s.send(GoHomeAndRefillGoal())
         assert s.wait(400) == 'aborted', s.result.message
         assert 'timeout' in s.result.message and len(reset.landings) == 2, (s.result.message, reset.landings)
-    finally:
-        reset.stop = True
-        stop_agent(agent, ual, be)
 
 
 def test_a_uav_landed_off_its_pad_after_a_failed_refill_takes_off_to_land_on_it_when_asked_again():
@@ -108,10 +110,7 @@ def test_a_uav_landed_off_its_pad_after_a_failed_refill_takes_off_to_land_on_it_
     home, and every later go_home_and_refill was refused at once, 'landed away from home: take off first':
     the central unit counted it broken and it stood there from 490 s to the end (one water UAV of two). Rule:
     going home, a UAV landed away from home takes off and lands on its pad again itself."""
-    be = FakeBackend()
-    agent, ual = start_uav(be, {'reland_attempts': 1, 'refill_timeout': 10.0}, speedup=4.0)
-    reset = Reset(be, ual)
-    try:
+    with refill_scene({'reland_attempts': 1, 'refill_timeout': 10.0}) as (be, agent, ual, reset):
         wander(be, ual, (1.8, 0.0, 0.0), (0.0, 0.0, 0.0), after_landings=2, reset=reset)
         fly_out(be, ual)
         s = be.servers['go_home_and_refill_action']
@@ -121,9 +120,6 @@ def test_a_uav_landed_off_its_pad_after_a_failed_refill_takes_off_to_land_on_it_
         s.send(GoHomeAndRefillGoal())
         assert s.wait(400) == 'succeeded', s.result.message
         assert reset.landings[-1] <= PAD_RADIUS, reset.landings
-    finally:
-        reset.stop = True
-        stop_agent(agent, ual, be)
 
 
 def test_the_landing_is_aimed_off_the_pad_away_from_the_neighbours_pads():
@@ -131,10 +127,7 @@ def test_the_landing_is_aimed_off_the_pad_away_from_the_neighbours_pads():
     from it. Robot 2 (pad (0, 0); pads (-2, 1.65) and (0, 3.3) beside it) now aims ~home_landing_offset
     off its pad, away from both: with no GNSS error it lands 0.5 m off its centre, each neighbour's pad at
     least 2.9 m away (2.59 m when landing on the centre), and is refilled all the same."""
-    be = FakeBackend()
-    agent, ual = start_uav(be, speedup=4.0)
-    reset = Reset(be, ual)
-    try:
+    with refill_scene() as (be, agent, ual, reset):
         fly_out(be, ual)
         s = be.servers['go_home_and_refill_action']
         s.send(GoHomeAndRefillGoal())
@@ -142,6 +135,3 @@ def test_the_landing_is_aimed_off_the_pad_away_from_the_neighbours_pads():
         assert len(reset.landings) == 1 and abs(reset.landings[0] - 0.5) < 0.15, reset.landings
         for pad in ((-2.0, 1.65), (0.0, 3.3)):
             assert np.linalg.norm(ual.pos[:2] - np.array(pad)) >= 2.9, (ual.pos, pad)
-    finally:
-        reset.stop = True
-        stop_agent(agent, ual, be)
