@@ -963,7 +963,7 @@ def test_realistic_103_a_uav_its_gnss_drift_takes_towards_the_wall_keeps_its_wat
 
 
 def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside_the_view(scenes):
-    """Realistic seed 105 (A's run on f622e84): a top-up of a fire at 98 % (too faint for the raw image) looked
+    """Realistic seed 105 (A's run on ff4b066): a top-up of a fire at 98 % (too faint for the raw image) looked
     around, turned 43 deg onto a warm area 5 degC over its wall (a wall's feature, not the fire), locked it as
     hot and poured its whole tank there. A warm area found beside the view counts only when it stands clearly
     over its wall (LOOK_MIN_RISE x ~out_contrast); the top-up then goes where the watering pose faces. Before:

@@ -725,7 +725,7 @@ def beside_facade_b(be, ual, scene, true_pos, bias_y, drift_to=None):
 
 
 def test_realistic_108_a_uav_ending_an_indoor_leg_near_a_wall_by_its_gnss_error_backs_off_it(uav):
-    """Realistic seed 108 (a run on be39635): UAV 2 flew an indoor leg on floor 1 to room 0's first
+    """Realistic seed 108 (a run on 3e9f35b): UAV 2 flew an indoor leg on floor 1 to room 0's first
     waypoint (15.7, 8.5, 6.2), 1.6 m off facade B's inner face by GNSS, under no window: the leg ended with
     no guard stop (the wall beside it, out of the leg's corridor) and 5 s later, looking around there, the UAV
     hit the wall at (16.0, 7.25): its GNSS error towards the facade was ~1.25 m by then. The laser saw that

@@ -120,7 +120,7 @@ def test_a_go_to_that_fails_in_the_air_leaves_only_a_hover_box(uav):
 
 
 def test_a_uav_landed_by_a_preempted_land_holds_only_its_parked_box(uav):
-    """Realistic seed 102 (helper C's run on 4b6320b): the central unit's heartbeat loss preempted UAV 3's
+    """Realistic seed 102 (helper C's run on ae45e51): the central unit's heartbeat loss preempted UAV 3's
     landing; the UAL landed it anyway (a landing cannot be held), the task ended with its 'land' column
     reserved and nothing freed it for 230 s (the next go-home found the UAV landed and skipped the landing
     that frees it): UAV 2's go-to was refused all that time. Rule: a landed idle UAV holds only its parked box."""

@@ -247,7 +247,7 @@ class GoTo(AgentTask):
 
     def _off_the_walls(self, what: str) -> None:
         """Indoors, at a leg's end: back off (wall_clearance.back_off) from the walls the laser sees nearer than
-        ~min_wall_clearance, whatever the GNSS says. Why (realistic seed 108, on be39635): a leg on floor 1
+        ~min_wall_clearance, whatever the GNSS says. Why (realistic seed 108, on 3e9f35b): a leg on floor 1
         ended 1.6 m off facade B's inner face by GNSS, truly ~0.7 m (the wall beside the leg, out of the leg
         guard's corridor); the GNSS error grew on towards the facade while the UAV looked around there and it
         hit the wall 5 s later. The laser saw that wall all along."""
