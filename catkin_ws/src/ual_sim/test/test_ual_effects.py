@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rostest on the one-wall world: sensor messages (shapes, frames, encodings), laser range to the wall,
 altimeter, thermal sees the active fire and not the inactive holder, water on the wall does not count and
-on the hole extinguishes, a blanket off target does not count, flying into the wall crashes, bad fault
+on the hole extinguishes (and /sim/water says so), a blanket off target does not count, flying into the wall crashes, bad fault
 requests fail."""
 import math
 import time
@@ -17,7 +17,7 @@ from std_srvs.srv import Trigger
 from uav_abstraction_layer.msg import State
 from uav_abstraction_layer.srv import GoToWaypoint, TakeOff
 
-from ual_sim.msg import FireStateArray, Score
+from ual_sim.msg import FireStateArray, Score, WaterAccount
 from ual_sim.srv import InjectFault
 
 WALL_X = 10.0
@@ -121,6 +121,14 @@ class TestEffects(unittest.TestCase):
         self.assertEqual(f.progress, 1.0)
         self.assertFalse(fire("F_off").extinguished)
         self.assertAlmostEqual(msg("/sim/score", Score).score, 1.0, places=3)
+        # the referee's account (/sim/water): the 3 s beside the hole on the wall, the fire's litres from it
+        self.assertTrue(stop().success)
+        time.sleep(1.0)
+        w = next(m for m in msg("/sim/water", WaterAccount).robots if m.robot_id == 2)
+        self.assertAlmostEqual(w.entered[list(w.holder_ids).index("F_on")], fire("F_on").litres_received, places=3)
+        self.assertGreater(w.litres_on_walls, 0.4)
+        self.assertAlmostEqual(w.litres_pumped, w.litres_into_fires + w.litres_on_walls + w.litres_fell_short,
+                               places=3)
 
     def test_5_blanket_off_target(self):
         srv("/mbzirc2020_1/ual/take_off", TakeOff)(2.0, True)

@@ -3,12 +3,13 @@
 Model: the jet is straight along the nozzle axis up to JET_RANGE; it makes a spot whose radius grows with the
 distance flown (JET_SPREAD_R0 + JET_SPREAD_PER_M * d). When it meets a wall face holding a fire, the share
 of the flow entering the hole is the area of the spot inside the hole disc over the spot area. Water that
-hits a wall elsewhere, or flies further than JET_RANGE, is lost.
+hits a wall elsewhere, or flies further than JET_RANGE, is lost. `WaterLedger` keeps, per robot, where its
+water went (the referee's account, /sim/water).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
@@ -67,3 +68,86 @@ def shoot(world: World, fires: FireSet, nozzle: np.ndarray, direction: np.ndarra
         if s > share:
             best, share = int(i), s
     return JetResult(end, True, best, share)
+
+
+AIM_MARGIN = 1.0   # m beyond JET_RANGE within which a holder in front of the nozzle counts as the one pumped at
+
+
+@dataclass
+class Pour:
+    """Litres of one robot at one holder: pumped while at it (`aimed`), of those the litres that hit a wall
+    or fell short, and the litres that entered its container (from whichever aim)."""
+    aimed: float = 0.0
+    entered: float = 0.0
+    on_wall: float = 0.0
+    fell_short: float = 0.0
+
+
+@dataclass
+class WaterUse:
+    """Where one robot's water went since the start (litres). pumped = into_fires + on_walls + fell_short."""
+    pumped: float = 0.0
+    into_fires: float = 0.0
+    on_walls: float = 0.0
+    fell_short: float = 0.0
+    pours: dict = field(default_factory=dict)   # holder index (None: no holder in front) -> Pour
+
+    def pour(self, holder: Optional[int]) -> Pour:
+        p = self.pours.get(holder)
+        if p is None:
+            p = self.pours[holder] = Pour()
+        return p
+
+
+class WaterLedger:
+    """The referee's account of the water: per robot, litres pumped, entered each fire's container, hit a
+    wall (beside the hole, an inactive holder's hole, any other face) or fell short (past JET_RANGE, on the
+    ground). Ground truth for /sim/water and tests; no robot reads it.
+
+    The holder pumped at is the nearest fire holder (active or not) whose face the nozzle is in front of and
+    the jet points at, within JET_RANGE + AIM_MARGIN: so a miss is charged to the fire the robot was working
+    on, and "efficiency of indoor pours" can be told from facade ones.
+
+    .. note:: Only a tick with water leaving a nozzle costs anything (a few numpy operations on the holders).
+    """
+
+    def __init__(self, fires: FireSet):
+        self.fires = fires
+        self.idx = fires.water_idx
+        self.pos = fires.pos[self.idx]
+        self.normal = fires.normal[self.idx]
+        self.offset = np.einsum("ij,ij->i", self.pos, self.normal)   # a point p is in front when n.p > this
+        self.robots: dict[int, WaterUse] = {}
+
+    def aimed_holder(self, nozzle: np.ndarray, direction: np.ndarray) -> Optional[int]:
+        """Index (in fires) of the holder pumped at, or None."""
+        if len(self.idx) == 0:
+            return None
+        rel = nozzle - self.pos
+        dist2 = (rel * rel).sum(axis=1)
+        ok = (self.normal @ nozzle > self.offset) & (self.normal @ direction < 0.0) \
+            & (dist2 <= (C.JET_RANGE + AIM_MARGIN) ** 2)
+        if not ok.any():
+            return None
+        return int(self.idx[np.where(ok, dist2, np.inf).argmin()])
+
+    def add(self, rid: int, litres: float, into: float, jet: JetResult, nozzle: np.ndarray,
+            direction: np.ndarray) -> None:
+        """Account `litres` leaving robot rid's nozzle as `jet`, `into` of them credited to jet.fire's
+        container (FireSet.add_water; 0 for an inactive holder's hole: that water hit a wall)."""
+        use = self.robots.get(rid)
+        if use is None:
+            use = self.robots[rid] = WaterUse()
+        pour = use.pour(self.aimed_holder(nozzle, direction))
+        use.pumped += litres
+        pour.aimed += litres
+        if into > 0.0:
+            use.into_fires += into
+            use.pour(jet.fire).entered += into
+        rest = litres - into
+        if jet.hit_wall:
+            use.on_walls += rest
+            pour.on_wall += rest
+        else:
+            use.fell_short += rest
+            pour.fell_short += rest

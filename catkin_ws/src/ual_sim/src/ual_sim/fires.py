@@ -90,16 +90,18 @@ class FireSet:
     def active(self) -> list[Fire]:
         return [f for f in self.fires if f.active]
 
-    def add_water(self, i: int, litres: float, now: float) -> None:
-        """Credit litres to fire i's container; stamps the extinguish time when it reaches the need."""
+    def add_water(self, i: int, litres: float, now: float) -> float:
+        """Credit litres to fire i's container; stamps the extinguish time when it reaches the need. Returns
+        the litres credited (0 for an inactive holder or a ground fire)."""
         f = self.fires[i]
         if not f.active or f.kind == GROUND or litres <= 0.0:
-            return
+            return 0.0
         was = f.extinguished
         f.litres += litres
         self.version += 1
         if f.extinguished and not was:
             f.extinguish_time = now
+        return litres
 
     def drop_blanket(self, x: float, y: float, height: float, now: float) -> Optional[int]:
         """A blanket released at (x, y) from `height` m: returns the index of the fire it covers, if any."""

@@ -26,11 +26,12 @@ from uav_abstraction_layer.srv import (GoToWaypoint, GoToWaypointResponse, Land,
                                        SetHomeResponse, TakeOff, TakeOffResponse)
 from visualization_msgs.msg import MarkerArray
 
-from ual_sim.msg import FireState, FireStateArray, Score
+from ual_sim.msg import FireState, FireStateArray, Score, WaterAccount, WaterUse
 from ual_sim.srv import InjectFault, InjectFaultResponse
 
 from . import constants as C
 from .markers import build_markers
+from .effects import WaterLedger
 from .robot import Robot
 from .sim import Simulation
 from .thermal import DOWNWARD, FORWARD, to_rgb
@@ -63,6 +64,22 @@ def yaw_quat(yaw: float) -> Quaternion:
 
 def quat_yaw(q: Quaternion) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def water_account(ledger: WaterLedger, header: Header) -> WaterAccount:
+    """/sim/water: the ledger of where each robot's water went, one WaterUse per robot that has pumped."""
+    fires = ledger.fires.fires
+    msg = WaterAccount(header=header)
+    for rid, use in sorted(ledger.robots.items()):
+        m = WaterUse(robot_id=rid, litres_pumped=use.pumped, litres_into_fires=use.into_fires,
+                     litres_on_walls=use.on_walls, litres_fell_short=use.fell_short)
+        pours = sorted(use.pours.items(), key=lambda kv: -1 if kv[0] is None else kv[0])
+        m.holder_ids = ["" if i is None else fires[i].holder.id for i, _ in pours]
+        m.holder_kinds = [WaterUse.NO_HOLDER if i is None else fires[i].kind for i, _ in pours]
+        m.aimed, m.entered = [p.aimed for _, p in pours], [p.entered for _, p in pours]
+        m.on_wall, m.fell_short = [p.on_wall for _, p in pours], [p.fell_short for _, p in pours]
+        msg.robots.append(m)
+    return msg
 
 
 class Due:
@@ -470,6 +487,7 @@ class SimNode:
         self.pub_rtf = rospy.Publisher("/sim/rtf", Float32, queue_size=Q, latch=True)
         self.pub_robots = rospy.Publisher("/sim/robots", PoseArray, queue_size=Q)
         self.pub_markers = rospy.Publisher("/sim/markers", MarkerArray, queue_size=Q, latch=True)
+        self.pub_water = rospy.Publisher("/sim/water", WaterAccount, queue_size=Q, latch=True)
         rospy.set_param("/sim/robot_ids", [int(i) for i in sorted(self.sim.robots)])
         self.io = {rid: RobotIO(self, r, k) for k, (rid, r) in enumerate(sorted(self.sim.robots.items()))}
         self.fault_srv = rospy.Service("/sim/inject_fault", InjectFault, self.on_fault)
@@ -625,6 +643,8 @@ class SimNode:
             fires_extinguished=len(sc["extinguished"]), elapsed=sc["elapsed"], time_left=sc["time_left"],
             extinguished_ids=[e[0] for e in sc["extinguished"]], extinguish_times=[e[1] for e in sc["extinguished"]],
             crashed_robots=[C.robot_ns(i) for i in sc["crashed"]]))
+        if self.pub_water.get_num_connections():
+            self.pub_water.publish(water_account(sim.water, Header(stamp=stamp)))
         if self.pub_robots.get_num_connections():
             self.pub_robots.publish(PoseArray(header=Header(stamp=stamp, frame_id=C.FRAME_ARENA), poses=[
                 Pose(Point(*r.pos), yaw_quat(r.yaw)) for _, r in sorted(sim.robots.items())]))

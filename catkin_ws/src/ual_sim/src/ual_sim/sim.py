@@ -15,7 +15,7 @@ import numpy as np
 
 from . import constants as C
 from .altimeter import altimeter_reading
-from .effects import JetResult, shoot
+from .effects import JetResult, WaterLedger, shoot
 from .fires import FireSet
 from .rgbd import RGBDCamera
 from .robot import Robot
@@ -70,6 +70,7 @@ class Simulation:
         self.wind = wind
         self.events: list[Event] = []
         self.jets: dict[int, JetResult] = {}
+        self.water = WaterLedger(self.fires)   # where each robot's water went (the referee's, /sim/water)
         self.blankets: list[Blanket] = []
         self.thermal = {FORWARD: ThermalCamera(FORWARD), DOWNWARD: ThermalCamera(DOWNWARD)}
         self.rgbd = RGBDCamera()
@@ -99,12 +100,14 @@ class Simulation:
                 jet = shoot(self.world, self.fires, p, d) if unk is None else shoot(
                     self.world, self.fires, p, d, unk.jet_spot_factor, unk.jet_drop_per_m2)
                 self.jets[r.id] = jet
+                into = 0.0
                 if jet.fire is not None and jet.share > 0.0:
                     was = self.fires.fires[jet.fire].extinguished
-                    self.fires.add_water(jet.fire, litres * jet.share, self.time)
+                    into = self.fires.add_water(jet.fire, litres * jet.share, self.time)
                     f = self.fires.fires[jet.fire]
                     if f.extinguished and not was:
                         self.events.append(Event(self.time, f"fire {f.holder.id} extinguished by robot {r.id}"))
+                self.water.add(r.id, litres, into, jet, p, d)
             if r.pump_on and r.water <= 0.0:
                 r.pump_on = False
                 self.events.append(Event(self.time, f"robot {r.id}: tank empty, pump stopped"))

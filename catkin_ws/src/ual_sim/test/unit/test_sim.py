@@ -332,3 +332,89 @@ def test_uav_enters_first_floor_through_window():
     run_until(s, r.goal_reached)
     r.go_to(9.0, 12.5, 8.3, 0.0)
     assert run_until(s, lambda: r.crashed, 30.0)
+
+
+# ---------------------------------------------------------------- the referee's water account (/sim/water)
+def pump_for(sim, rid, seconds):
+    assert sim.start_pump(rid)[0]
+    for _ in range(round(seconds / DT)):
+        sim.step(DT)
+    sim.stop_pump(rid)
+
+
+def test_water_account_a_jet_fully_into_the_hole_counts_every_litre_in(sim):
+    f = sim.fires.by_id("C_1")
+    f.active = True
+    i = sim.fires.fires.index(f)
+    hover_facing(sim, sim.robots[2], f, 1.5)
+    pump_for(sim, 2, 2.0)
+    use = sim.water.robots[2]
+    assert use.pumped == pytest.approx(2.0 * C.PUMP_FLOW, rel=0.05)
+    assert use.into_fires == pytest.approx(use.pumped)
+    assert use.on_walls == pytest.approx(0.0) and use.fell_short == pytest.approx(0.0)
+    assert set(use.pours) == {i}                                  # pumped at C_1 all along
+    assert use.pours[i].aimed == pytest.approx(use.pumped)
+    assert use.pours[i].entered == pytest.approx(f.litres)       # what the fire received
+
+
+def test_water_account_a_jet_on_the_wall_counts_none_in(sim):
+    f = sim.fires.by_id("C_1")
+    f.active = True
+    i = sim.fires.fires.index(f)
+    r = sim.robots[2]
+    hover_facing(sim, r, f, 1.5)
+    assert r.go_to(r.pos[0], r.pos[1] + 0.6, r.pos[2], r.yaw)[0]   # 0.6 m beside the hole
+    assert run_until(sim, r.goal_reached)
+    pump_for(sim, 2, 2.0)
+    use = sim.water.robots[2]
+    assert use.pumped > 0.3 and f.litres == 0.0
+    assert use.into_fires == 0.0
+    assert use.on_walls == pytest.approx(use.pumped)
+    assert use.pours[i].aimed == pytest.approx(use.pumped)        # the miss is charged to the fire aimed at
+    assert use.pours[i].on_wall == pytest.approx(use.pumped) and use.pours[i].entered == 0.0
+
+
+def test_water_account_an_inactive_holders_hole_is_a_wall(sim):
+    f = sim.fires.by_id("C_1")
+    f.active = False
+    hover_facing(sim, sim.robots[2], f, 1.5)
+    pump_for(sim, 2, 1.0)
+    use = sim.water.robots[2]
+    assert use.pumped > 0.1 and use.into_fires == 0.0 and use.on_walls == pytest.approx(use.pumped)
+
+
+def test_water_account_out_of_range_falls_short_and_nothing_in_front_is_no_holder(sim):
+    f = sim.fires.by_id("C_1")
+    f.active = True
+    i = sim.fires.fires.index(f)
+    hover_facing(sim, sim.robots[2], f, C.JET_RANGE + 0.5)       # in front of it, beyond the jet
+    pump_for(sim, 2, 1.0)
+    use = sim.water.robots[2]
+    assert use.pumped > 0.1 and use.into_fires == 0.0 and use.fell_short == pytest.approx(use.pumped)
+    assert use.pours[i].fell_short == pytest.approx(use.pumped)
+    r = sim.robots[3]                                             # above its pad, nozzle away from the building
+    r.yaw = math.pi
+    assert r.take_off(1.0)[0] and run_until(sim, r.goal_reached)
+    pump_for(sim, 3, 1.0)
+    assert set(sim.water.robots[3].pours) == {None} and sim.water.robots[3].fell_short > 0.1
+
+
+def test_water_account_message_lists_every_pour(sim):
+    import io
+    import rospy
+    from std_msgs.msg import Header
+    from ual_sim.msg import FireState, WaterAccount, WaterUse
+    from ual_sim.node import water_account
+    f = sim.fires.by_id("C_1")
+    f.active = True
+    hover_facing(sim, sim.robots[2], f, 1.5)
+    pump_for(sim, 2, 1.0)
+    buf = io.BytesIO()
+    water_account(sim.water, Header(stamp=rospy.Time.from_sec(sim.time))).serialize(buf)
+    back = WaterAccount().deserialize(buf.getvalue())
+    assert [m.robot_id for m in back.robots] == [2]
+    m = back.robots[0]
+    assert list(m.holder_ids) == ["C_1"] and list(m.holder_kinds) == [FireState.FACADE]
+    assert m.entered[0] == pytest.approx(f.litres, rel=1e-5)
+    assert m.litres_into_fires == pytest.approx(m.litres_pumped, rel=1e-5)
+    assert len(m.aimed) == len(m.on_wall) == len(m.fell_short) == 1 and WaterUse.NO_HOLDER == 255
