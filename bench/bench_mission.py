@@ -5,7 +5,8 @@ Prints and writes bench/results/mission.json: share of seeds with all 8 fires ou
 minutes, mean time to put out every fire, mean score, crashes, real-time factor reached (sim time / wall
 time of the same run) and, next to it, the CPU the trial cost: CPU seconds per simulated second, in all and
 per node kind (agents, ual_sim, detectors, central unit, estimator, others), sampled from /proc for the
-whole run (_node_cpu.py). Long: about 20/RTF minutes per seed (less when every fire is out early).
+whole run (_node_cpu.py), and the water efficiency of indoor / facade pours (litres into fires per litre
+pumped at holders of that kind, pooled over the runs, from each summary's `water_efficiency`). Long: about 20/RTF minutes per seed (less when every fire is out early).
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
     python bench/bench_mission.py --uncertainty realistic --seeds 20     (seeds 101-120, never tuned on)
 The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`). `--uncertainty realistic` runs the
@@ -55,6 +56,29 @@ def mean_cpu_per_sim_s(runs: list) -> dict:
     return {k: round(sum(r["cpu_s"][k] for r in runs) / sim, 4) for k in KINDS + ("total",)} if sim else None
 
 
+WATER_KINDS = ("indoor", "facade")
+
+
+def water_efficiency(runs: list) -> dict:
+    """Per fire kind, over the runs: litres pumped at holders of that kind, litres into fires of that kind
+    and their ratio (null when none was pumped; a summary without `water_efficiency` adds nothing)."""
+    out = {}
+    for kind in WATER_KINDS:
+        per_run = [r.get("water_efficiency", {}).get(kind) or {} for r in runs]
+        pumped = sum(w.get("litres_pumped") or 0.0 for w in per_run)
+        into = sum(w.get("litres_into_fires") or 0.0 for w in per_run)
+        out[kind] = {"litres_pumped": round(pumped, 2), "litres_into_fires": round(into, 2),
+                     "efficiency": round(into / pumped, 3) if pumped > 0 else None}
+    return out
+
+
+def format_water(eff: dict) -> str:
+    """'indoor 0.31 (3.1 of 10.0 L), facade 0.85 (...)' ('-' for a kind nothing was pumped at)."""
+    return ", ".join(f"{k} " + ("-" if v.get("efficiency") is None else
+                                f"{v['efficiency']:.2f} ({v['litres_into_fires']:.1f} of {v['litres_pumped']:.1f} L)")
+                     for k, v in eff.items())
+
+
 def summarize(runs: list, args: argparse.Namespace) -> dict:
     """The figures over the runs so far (written after every seed, so a cut-short run still reports)."""
     ok = [r for r in runs if "error" not in r]
@@ -74,10 +98,11 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
                                                        if r.get("real_time_factor")), 2) if ok else None,
         "mean_wall_per_trial_s": round(statistics.mean(r["wall_total_s"] for r in runs), 1) if runs else None,
         "cpu_s_per_sim_s": mean_cpu_per_sim_s(ok),
+        "water_efficiency": water_efficiency(ok),
         "per_seed": [{k: r.get(k) for k in ("seed", "fires_extinguished", "fires_total", "score",
                                             "all_out_time_s", "crashes", "real_time_factor", "end_reason",
                                             "min_separation_m", "sim_time_s", "cpu_s", "cpu_s_per_sim_s",
-                                            "load_average_end", "error")} for r in runs],
+                                            "load_average_end", "water_efficiency", "error")} for r in runs],
     }
     res["seeds_requested"] = args.seeds
     write_result("mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}", res, say=False)
@@ -116,9 +141,11 @@ def main() -> int:
                   f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
             print(f"  CPU-s per sim-s: {format_cpu(s['cpu_s_per_sim_s'])} (load {s['load_average_end']})",
                   flush=True)
+            print(f"  water into fires per litre pumped: {format_water(water_efficiency([s]))}", flush=True)
         summarize(runs, args)
     res = summarize(runs, args)
     print(json.dumps({k: v for k, v in res.items() if k != "per_seed"}, indent=2))
+    print(f"water efficiency over the runs (litres into fires per litre pumped): {format_water(res['water_efficiency'])}")
     ok = [r for r in runs if "error" not in r]
     return 0 if ok else 1
 

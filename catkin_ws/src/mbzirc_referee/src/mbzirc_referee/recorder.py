@@ -23,12 +23,12 @@ from mbzirc_arena.messages import feed_position
 
 from .report import write_report
 from .slam_inputs import SlamInputs
-from .summary import MissionRecord
+from .summary import KIND_NAMES, MissionRecord, Pour
 
 try:  # the simulator's types: optional so that the recorder still runs against a real-robot setup
-    from ual_sim.msg import FireStateArray, Score
+    from ual_sim.msg import FireStateArray, Score, WaterAccount
 except ImportError:  # pragma: no cover - depends on the workspace
-    FireStateArray = Score = None
+    FireStateArray = Score = WaterAccount = None
 
 SCORE_CLOCK_SLACK_S = 10.0   # s: a /sim/score may be computed at a clock a little ahead of ours
 MAP_FETCH_TIMEOUT_S = 15.0   # wall s: the SLAM maps asked for at the end of the trial
@@ -41,6 +41,13 @@ def status_shape_ok(status: Any) -> bool:
     agents, fires = status.get("agents", {}), status.get("fires", [])
     return isinstance(agents, dict) and all(isinstance(a, dict) for a in agents.values()) \
         and isinstance(fires, list)
+
+
+def water_of(m: Any) -> list[Pour]:
+    """A ual_sim/WaterUse as the record keeps it: its pours (holder "" = none in front; kinds by name)."""
+    return [Pour(h or None, KIND_NAMES.get(k) if h else None, a, e, w, s)
+            for h, k, a, e, w, s in zip(m.holder_ids, bytearray(m.holder_kinds), m.aimed, m.entered,
+                                        m.on_wall, m.fell_short)]
 
 
 class MissionRecorder:
@@ -78,6 +85,7 @@ class MissionRecorder:
         if FireStateArray is not None:
             self.subs.append(rospy.Subscriber("/sim/fires", FireStateArray, self._on_fires, queue_size=1))
             self.subs.append(rospy.Subscriber("/sim/score", Score, self._on_score, queue_size=1))
+            self.subs.append(rospy.Subscriber("/sim/water", WaterAccount, self._on_water, queue_size=1))
         else:
             rospy.logerr("mission_recorder: ual_sim messages not found: no ground truth, no score")
         # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
@@ -112,7 +120,13 @@ class MissionRecorder:
         with self.lock:
             for f in msg.fires:
                 self.rec.update_fire(f.id, f.kind, f.floor, (f.position.x, f.position.y, f.position.z),
-                                     f.active, f.extinguished, f.progress, f.extinguish_time)
+                                     f.active, f.extinguished, f.progress, f.extinguish_time,
+                                     f.litres_received, f.litres_needed)
+
+    def _on_water(self, msg: Any) -> None:
+        with self.lock:
+            for m in msg.robots:
+                self.rec.set_water(str(m.robot_id), water_of(m))
 
     def _on_score(self, msg: Any) -> None:
         # the record keeps the largest elapsed time and ends the trial past ~duration: a non-finite score,

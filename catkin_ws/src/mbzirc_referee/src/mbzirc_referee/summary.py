@@ -14,9 +14,10 @@ from mbzirc_arena.c3 import ARENA
 from .indoor_flights import SlamRecord
 
 KIND_NAMES = {0: "facade", 1: "ground", 2: "indoor"}  # ual_sim/FireState kind constants
+WATER_KINDS = ("facade", "indoor")                     # fires put out with water
 SUMMARY_KEYS = ("seed", "sim_time_s", "wall_time_s", "real_time_factor", "score", "fires_extinguished",
-                "fires_total", "crashes", "fires")
-FIRE_KEYS = ("id", "kind", "floor", "extinguished_by", "t_extinguished")
+                "fires_total", "crashes", "fires", "robots", "water_efficiency")
+FIRE_KEYS = ("id", "kind", "floor", "extinguished_by", "t_extinguished", "litres_received")
 
 
 @dataclass
@@ -30,6 +31,28 @@ class FireRecord:
     extinguished: bool = False
     t_extinguished: Optional[float] = None
     extinguished_by: Optional[str] = None
+    litres_received: float = 0.0            # in its container (facade, indoor), whoever poured it
+    litres_needed: Optional[float] = None
+
+
+@dataclass
+class Pour:
+    """One robot's litres at one holder (ual_sim/WaterUse): pumped while at it, entered its container,
+    hit a wall, fell short (a robot's pours sum to its litres pumped). fire None: no holder in front."""
+    fire: Optional[str]
+    kind: Optional[str]
+    aimed: float
+    entered: float
+    on_wall: float
+    fell_short: float
+
+
+def _ratio(num: float, den: float) -> Optional[float]:
+    return round(num / den, 3) if den > 1e-9 else None
+
+
+def _litres(x: float) -> float:
+    return round(x, 3)
 
 
 def _closer(tracks: dict, robot: str, point: tuple, best: float) -> Optional[tuple]:
@@ -86,9 +109,11 @@ class MissionRecord:
     elapsed: float = 0.0
     robot_kinds: dict[str, str] = field(default_factory=dict)  # robot id -> "water" / "blanket" / "ugv"
     slam: SlamRecord = field(default_factory=lambda: SlamRecord(footprints=ARENA.footprints))  # indoor_flights.py
+    water: dict[str, list[Pour]] = field(default_factory=dict)  # robot id -> where its water went, per holder
 
     def update_fire(self, fire_id: str, kind: int, floor: int, position: tuple[float, float, float],
-                    active: bool, extinguished: bool, progress: float, t_ext: float) -> None:
+                    active: bool, extinguished: bool, progress: float, t_ext: float,
+                    litres_received: float = 0.0, litres_needed: Optional[float] = None) -> None:
         """Record one ground-truth fire state (inactive holders are not fires of the trial)."""
         if not active:
             return
@@ -96,10 +121,15 @@ class MissionRecord:
         if rec is None:
             rec = self.fires[fire_id] = FireRecord(fire_id, KIND_NAMES.get(kind, "unknown"), int(floor), position)
         rec.progress = float(progress)
+        rec.litres_received, rec.litres_needed = float(litres_received), litres_needed
         if extinguished and not rec.extinguished:
             rec.extinguished = True
             rec.t_extinguished = float(t_ext) if t_ext >= 0 else self.elapsed
             rec.extinguished_by = self.nearest_robot(rec.position, rec.kind)
+
+    def set_water(self, robot: str, pours: list[Pour]) -> None:
+        """The simulator's latest account of where a robot's water went (cumulative since the start)."""
+        self.water[robot] = pours
 
     def add_pose(self, robot: str, t: float, x: float, y: float, z: float, min_dt: float = 0.5) -> None:
         """Append to a robot's track (at most one point per `min_dt`) and track the closest approach."""
@@ -167,6 +197,42 @@ class MissionRecord:
                 "closest_approach": self.truth.closest_approach, "separation_source": "truth",
                 "min_reported_separation_m": reported, "closest_reported_approach": self.closest_approach or None}
 
+    def _robots_water(self) -> dict:
+        """Per robot that pumped: litres pumped, into fires, on walls, fallen short, efficiency (into fires
+        per litre pumped) and its pours (per holder pumped at)."""
+        out = {}
+        for robot, pours in sorted(self.water.items()):
+            pumped, into = sum(p.aimed for p in pours), sum(p.entered for p in pours)
+            out[robot] = {
+                "litres_pumped": _litres(pumped), "litres_into_fires": _litres(into),
+                "efficiency": _ratio(into, pumped), "litres_on_walls": _litres(sum(p.on_wall for p in pours)),
+                "litres_fell_short": _litres(sum(p.fell_short for p in pours)),
+                "pours": [{"fire": p.fire, "kind": p.kind, "litres_aimed": _litres(p.aimed),
+                           "litres_in": _litres(p.entered), "litres_on_wall": _litres(p.on_wall),
+                           "litres_fell_short": _litres(p.fell_short)} for p in pours]}
+        return out
+
+    def _water_efficiency(self) -> dict:
+        """Per kind of fire put out with water: litres pumped at holders of that kind, litres into fires of
+        that kind, and their ratio (null when none was pumped)."""
+        out = {}
+        for kind in WATER_KINDS:
+            pours = [p for w in self.water.values() for p in w if p.kind == kind]
+            pumped, into = sum(p.aimed for p in pours), sum(p.entered for p in pours)
+            out[kind] = {"litres_pumped": _litres(pumped), "litres_into_fires": _litres(into),
+                         "efficiency": _ratio(into, pumped)}
+        return out
+
+    def _fire_water(self, f: FireRecord) -> dict:
+        """A fire's litres: received (its container), needed, pumped at it, and who poured what into it."""
+        if f.kind not in WATER_KINDS:
+            return {"litres_received": None}
+        pours = [(robot, p) for robot, w in sorted(self.water.items()) for p in w if p.fire == f.fire_id]
+        return {"litres_received": _litres(f.litres_received),
+                "litres_needed": None if f.litres_needed is None else _litres(f.litres_needed),
+                "litres_aimed": _litres(sum(p.aimed for _, p in pours)),
+                "litres_by_robot": {robot: _litres(p.entered) for robot, p in pours if p.entered > 0.0}}
+
     def summary(self, wall_time: float, end_reason: str = "", extra: Optional[dict[str, Any]] = None) -> dict:
         """The summary.json object."""
         fires = sorted(self.fires.values(), key=lambda f: (f.kind, f.floor, f.fire_id))
@@ -185,8 +251,11 @@ class MissionRecord:
             "end_reason": end_reason,
             "fires": [{"id": f.fire_id, "kind": f.kind, "floor": f.floor, "extinguished_by": f.extinguished_by,
                        "t_extinguished": None if f.t_extinguished is None else round(f.t_extinguished, 2),
-                       "progress": round(f.progress, 3), "position": [round(v, 2) for v in f.position]}
+                       "progress": round(f.progress, 3), "position": [round(v, 2) for v in f.position],
+                       **self._fire_water(f)}
                       for f in fires],
+            "robots": self._robots_water(),
+            "water_efficiency": self._water_efficiency(),
             "indoor_flights": self.indoor_flights(),
         }
         out.update(extra or {})

@@ -110,3 +110,51 @@ def test_separation_is_judged_on_the_true_poses_when_the_simulator_gives_them():
 def test_separation_falls_back_to_the_data_feeds_without_truth():
     s = _record().summary(10.0)
     assert s["separation_source"] == "data_feed" and "min_reported_separation_m" not in s
+
+
+def test_summary_says_where_the_water_went_per_fire_and_per_robot():
+    """summary.json tells how many litres each fire received and each robot pumped, put into fires, lost on
+    walls or short, per fire kind: so a fire left at 0.96 after three tanks tells a bad aim (water beside
+    the hole) from an early 'out' judgment (little water pumped at it)."""
+    from mbzirc_referee.summary import Pour
+    r = _record()
+    r.update_fire("indoor_in1_w", 2, 1, (17.7, 8.5, 4.5), True, False, 0.5, -1, 0.6, 1.2)
+    r.update_fire("facade_C_3", 0, 2, (11.4, 14.5, 10.5), True, False, 0.4, -1, 0.4, 1.0)
+    r.set_water("2", [Pour("indoor_in1_w", "indoor", 3.0, 0.6, 2.4, 0.0), Pour("facade_C_3", "facade", 0.6, 0.4, 0.1, 0.1),
+                      Pour(None, None, 0.4, 0.0, 0.0, 0.4)])
+    s = r.summary(20.0, "time")
+    assert check_summary(s) == []
+    fires = {f["id"]: f for f in s["fires"]}
+    assert fires["indoor_in1_w"]["litres_received"] == 0.6 and fires["indoor_in1_w"]["litres_needed"] == 1.2
+    assert fires["indoor_in1_w"]["litres_aimed"] == 3.0
+    assert fires["indoor_in1_w"]["litres_by_robot"] == {"2": 0.6}
+    assert fires["ground_0"]["litres_received"] is None                     # a blanket's fire
+    robot = s["robots"]["2"]
+    assert (robot["litres_pumped"], robot["litres_into_fires"], robot["efficiency"]) == (4.0, 1.0, 0.25)
+    assert robot["litres_on_walls"] == 2.5 and robot["litres_fell_short"] == 0.5
+    assert robot["pours"][0] == {"fire": "indoor_in1_w", "kind": "indoor", "litres_aimed": 3.0, "litres_in": 0.6,
+                                 "litres_on_wall": 2.4, "litres_fell_short": 0.0}
+    assert s["water_efficiency"] == {"facade": {"litres_pumped": 0.6, "litres_into_fires": 0.4, "efficiency": 0.667},
+                                     "indoor": {"litres_pumped": 3.0, "litres_into_fires": 0.6, "efficiency": 0.2}}
+    assert "robots" in check_summary({k: v for k, v in s.items() if k != "robots"})
+    json.dumps(s)
+
+
+def test_the_recorder_keeps_the_simulators_water_account():
+    """/sim/water (ual_sim/WaterAccount) as the record keeps it, after a trip on the wire."""
+    import io
+    import threading
+    from ual_sim.msg import WaterAccount, WaterUse
+    from mbzirc_referee import recorder as R
+    rec = R.MissionRecorder.__new__(R.MissionRecorder)
+    rec.rec, rec.lock = MissionRecord(), threading.Lock()
+    msg = WaterAccount(robots=[WaterUse(robot_id=3, litres_pumped=2.0, litres_into_fires=0.5, litres_on_walls=1.5,
+                                        holder_ids=["", "in2_e"], holder_kinds=[WaterUse.NO_HOLDER, 2],
+                                        aimed=[0.25, 1.75], entered=[0.0, 0.5], on_wall=[0.25, 1.25],
+                                        fell_short=[0.0, 0.0])])
+    buf = io.BytesIO()
+    msg.serialize(buf)
+    rec._on_water(WaterAccount().deserialize(buf.getvalue()))
+    assert [(p.fire, p.kind, p.aimed, p.entered, p.on_wall) for p in rec.rec.water["3"]] == [
+        (None, None, 0.25, 0.0, 0.25), ("in2_e", "indoor", 1.75, 0.5, 1.25)]
+    assert rec.rec.summary(1.0)["robots"]["3"]["efficiency"] == 0.25
