@@ -59,14 +59,20 @@ class TestCentralUnit(unittest.TestCase):
                         "agent 2 got no work after it came back")
 
         # Restart the central unit (respawn in the launch file); the mission goes on.
+        t_kill = rospy.get_time()
         rosnode.kill_nodes(["/central_unit"])
         rospy.sleep(1.0)
         self.assertTrue(wait_for(lambda: agents.mission.all_out(), deadline - rospy.get_time()),
                         f"not every fire out: {agents.mission.fires} / {status}")
+        # the respawned central unit ticks with UAV 3 alive (it may have missed UAV 3 flying: the restart
+        # can come as it goes home; a crash is judged on what the running central unit saw)
+        self.assertTrue(wait_for(lambda: status.get("t", 0.0) > t_kill + 1.0 and status["agents"]["3"]["alive"], 30.0),
+                        f"the central unit did not come back: {status}")
         self.assertTrue(any(r[1] == "0" and r[2] == "search_indoor" for r in agents.received))
 
         # UAV 3 (it flew) falls back to UNINITIALIZED, the simulator's crash state: its regions are freed
-        # and it gets no more goals.
+        # and it gets no more goals. Within 10 s: at once if the central unit saw it fly, else after
+        # bookkeeping.CRASH_CONFIRM_S (3 s) of UNINITIALIZED, plus a few ticks.
         self.assertEqual(agents.freed, [])
         with agents.lock:
             agents.mission.agents["3"].ual_state = 0

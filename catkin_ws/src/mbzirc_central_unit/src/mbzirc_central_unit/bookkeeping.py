@@ -14,6 +14,10 @@ from .failure_rules import LEG_BLOCKED, NOT_SEEN_HOT, LegBackoff, UnconfirmedFir
 from .world_model import AgentView, WorldView
 
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
+# s an agent seen ready, never seen moving, stays UNINITIALIZED before it counts as crashed (`note_crashes`):
+# longer than a respawned agent reports UNINITIALIZED before it hears its UAL again (ual/state comes on a
+# change and at least every 1 s: ual_sim STATE_KEEPALIVE_S), with the margin of two more of those
+CRASH_CONFIRM_S = 3.0
 
 
 class Bookkeeping:
@@ -32,6 +36,7 @@ class Bookkeeping:
         self.seen_flying: set[str] = set()
         self.seen_ready: set[str] = set()   # agents whose UAL reported a state (not UNINITIALIZED) once
         self.crashed: set[str] = set()  # robots seen moving, now UNINITIALIZED: the simulator's crash state
+        self.uninitialized_since: dict[str, float] = {}   # agents seen ready, UNINITIALIZED since then
         self.leg_backoff = LegBackoff(params.leg_blocked_backoff, params.leg_blocked_backoff_max,
                                       params.max_blocked_legs)
         self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
@@ -136,16 +141,29 @@ class Bookkeeping:
 
     def note_crashes(self, world: WorldView) -> list[str]:
         """Agents that crashed since the last call: a robot that moved (UAV flying, UGV driving:
-        FLYING_AUTO) and is UNINITIALIZED again (it lies where it fell, deaf). Their goal is forgotten."""
+        FLYING_AUTO) and is UNINITIALIZED again (it lies where it fell, deaf); or one seen ready (landed)
+        and UNINITIALIZED for CRASH_CONFIRM_S since. Their goal is forgotten.
+
+        Why the second: the simulator's crash state is UNINITIALIZED whatever the robot did (a landed UAV
+        struck by another robot crashes too), and a restarted central unit never saw a robot that flew
+        before fly: its crash went unnoticed and its regions were never freed (central_unit.test, the crash
+        of UAV 3 after the restart, when the restart came as it went home: 'the crashed UAV's regions were
+        not freed'). Confirmed over CRASH_CONFIRM_S: a respawned agent says UNINITIALIZED until it hears
+        its UAL."""
         new = []
         for a in world.agents.values():
+            if a.ual_state != C.UAL_UNINITIALIZED:
+                self.seen_ready.add(a.agent_id)
+                self.uninitialized_since.pop(a.agent_id, None)
             if a.ual_state in (C.UAL_TAKING_OFF, C.UAL_FLYING_AUTO, C.UAL_FLYING_MANUAL):
                 self.seen_flying.add(a.agent_id)
-            elif a.ual_state == C.UAL_UNINITIALIZED and a.agent_id in self.seen_flying \
+            elif a.ual_state == C.UAL_UNINITIALIZED and a.agent_id in self.seen_ready \
                     and a.agent_id not in self.crashed and a.alive(world.now, self.p.agent_timeout):
-                self.crashed.add(a.agent_id)
-                self.in_flight.pop(a.agent_id, None)
-                new.append(a.agent_id)
+                since = self.uninitialized_since.setdefault(a.agent_id, world.now)
+                if a.agent_id in self.seen_flying or world.now - since >= CRASH_CONFIRM_S:
+                    self.crashed.add(a.agent_id)
+                    self.in_flight.pop(a.agent_id, None)
+                    new.append(a.agent_id)
         return new
 
     def waiting_for_reported_fires(self, agent_id: str, world: WorldView) -> bool:

@@ -591,3 +591,27 @@ def test_realistic_108_a_facade_floor_reached_for_its_search_is_searched_before_
     fires[2].status = C.STATUS_EXTINGUISHED
     [cmd] = s2.decide(world)
     assert cmd.task != C.SEARCH_FACADE and cmd.target == ("transit", 1), cmd
+
+
+def test_a_robot_a_restarted_central_unit_saw_only_landed_and_now_uninitialized_has_crashed():
+    """central_unit.test under load: the central unit restarted as UAV 3 went home (its go_home_and_refill
+    ended in the gap), so the new one saw it only landed; UAV 3 then fell back to UNINITIALIZED (the
+    simulator's crash state) and was never judged crashed: 'the crashed UAV's regions were not freed'. Seen
+    ready, then UNINITIALIZED for CRASH_CONFIRM_S: crashed. A respawned agent's UNINITIALIZED until it hears
+    its UAL (ual/state at least every 1 s), shorter: not."""
+    from mbzirc_central_unit.bookkeeping import CRASH_CONFIRM_S
+    s = Strategy()                                  # the restarted node: it never saw anybody fly
+
+    def uav3(t, state):
+        a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 0.0, 3.3, 0.0, ual_state=state, water_level=2.0,
+                      last_seen=t)
+        return s.decide(WorldView(t, {"3": a}, {}))
+    uav3(0.0, C.UAL_LANDED_ARMED)
+    uav3(1.0, C.UAL_UNINITIALIZED)                  # a respawned agent, not yet hearing its UAL
+    uav3(1.0 + CRASH_CONFIRM_S - 0.5, C.UAL_UNINITIALIZED)
+    uav3(1.0 + CRASH_CONFIRM_S - 0.4, C.UAL_LANDED_ARMED)
+    assert not s.crashed
+    uav3(10.0, C.UAL_UNINITIALIZED)                 # crashed
+    assert not s.crashed                            # not at once
+    cmds = uav3(10.0 + CRASH_CONFIRM_S, C.UAL_UNINITIALIZED)
+    assert "3" in s.crashed and s.broken("3") and not cmds
