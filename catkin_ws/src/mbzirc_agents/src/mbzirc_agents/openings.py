@@ -31,13 +31,16 @@ class SeenOpening:
 
     Args:
         lateral: m, body y of its centre (left +); distance: m, the wall's distance along x at the centre;
-        width: m between its edges; left, right: body y of the left and right edges.
+        width: m between its edges; left, right: body y of the left and right edges; at: arena (x, y) of its
+        centre on the wall's face, placed with the pose the robot had when the scan was taken (the passage
+        sets it; None from the finder, which knows no pose).
     """
     lateral: float
     distance: float
     width: float
     left: float
     right: float
+    at: Optional[Tuple[float, float]] = None
 
 
 def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_slope: float = 0.5,

@@ -6,6 +6,7 @@ windows and doors open, shifted by `shift` (a world whose true geometry is `shif
 model: what a robot with a GNSS bias of -shift sees).
 """
 import math
+from collections import deque
 
 import numpy as np
 
@@ -75,7 +76,9 @@ def wall_boxes(z, shift=(0.0, 0.0), openings=None):
 class LaserScene:
     """Publishes the fake UAL's laser and altimeter at 10 Hz (sim clock) into an agent: ray cast from its
     true position against `boxes` (default: the arena model's walls at its height, shifted by `shift`), with
-    the realistic profile's noise and dropouts unless `noisy` is False; `blind` sends every beam NaN.
+    the realistic profile's noise and dropouts unless `noisy` is False; `blind` sends every beam NaN. Each scan
+    is stamped with the sim time it was taken at; `lag` (s, or a function of that time; None from it: the scan
+    is lost) delays its arrival, in order, as a loaded machine does (ROS keeps a topic's order).
 
     Args: be (FakeBackend), ual (FakeUal), shift (m, x, y), laser_z (m above the robot's z), z_shift (m:
     the whole world, ground included, is that much higher than the fake UAL's z frame: a vertical GNSS bias).
@@ -85,6 +88,7 @@ class LaserScene:
         from sensor_msgs.msg import LaserScan, Range
         self.be, self.ual, self.shift, self.laser_z, self.z_shift = be, ual, shift, laser_z, z_shift
         self.noisy, self.blind, self.stop = noisy, False, False
+        self.lag = 0.0
         self.boxes = None
         self.rng = np.random.default_rng(seed)
         self._msg, self._range = LaserScan, Range
@@ -98,13 +102,27 @@ class LaserScene:
             return cast(self.ual.pos[:2], self.ual.yaw, boxes, 0.01, 0.01, 0.02, self.rng)
         return cast(self.ual.pos[:2], self.ual.yaw, boxes)
 
+    def scan(self, t, ranges):
+        """A LaserScan of ranges taken at sim time t."""
+        import rospy
+        m = self._msg(angle_min=ANGLE_MIN, angle_increment=INC, range_min=0.15, range_max=25.0, ranges=list(ranges))
+        m.header.stamp = rospy.Time.from_sec(t)
+        return m
+
     def _loop(self):
+        pending = deque()                    # (due, scan) in the order taken
         while not self.stop:
-            cb = self.be.subs.get('scan')
-            if cb is not None:
+            now = self.be.clock.now()
+            if self.be.subs.get('scan') is not None:
                 r = np.full(BEAMS, np.nan) if self.blind else self.ranges()
-                cb(self._msg(angle_min=ANGLE_MIN, angle_increment=INC, range_min=0.15, range_max=25.0,
-                             ranges=list(r)))
+                lag = self.lag(now) if callable(self.lag) else self.lag
+                if lag is not None:
+                    pending.append((now + lag, self.scan(now, r)))
+            while pending and pending[0][0] <= now + 1e-9:
+                msg = pending.popleft()[1]
+                cb = self.be.subs.get('scan')
+                if cb is not None:
+                    cb(msg)
             alt = self.be.subs.get('altimeter')
             if alt is not None:            # height above the ground (the test worlds' places have no roof below)
                 alt(self._range(range=float(self.ual.pos[2]) - self.z_shift))

@@ -9,7 +9,13 @@ seen (ahead, then beside it: `openings.side_clearances`).
 What the laser sees is put in the robot's frame of now, not of the scan: the robot moved since the scan
 was taken (more so on a loaded machine, where the task loop and the scan callback lag): steering on the
 scan's own frame then overshoots, the robot swings across the opening's middle and, forward motion being
-allowed only near the middle, crawls (seen: a window not passed in 29 s).
+allowed only near the middle, crawls (seen: a window not passed in 29 s). Every return of a scan is placed
+in the arena with the pose the robot had when THAT scan was taken (`_scan_pose`: the pose history at the
+scan's stamp), and from there into the frame of now: the same pairing at every use (centring, the jump
+check, the edges beside, the doorway on a leg, keeping off returns). Paired with the pose of when the scan
+reached the task instead, the robot's motion meanwhile (a loaded machine delivers scans up to a second
+late) moved the opening: 'the door seen by the laser jumped 0.53 m' (a fresh clone's passage_realistic
+test under load), 'the window ... jumped 0.64 m' (realistic seed 103, a window passage wasted).
 
 Gusts (near the tower's first floor they push a UAV tenths of a metre about): the robot goes into the
 wall only centred enough that its frame (`~frame_radius`) clears the sensed edges by `~opening_pass_margin`,
@@ -28,7 +34,7 @@ UAV holds its height on the height at the wall's entry plus its climb since by i
 from __future__ import annotations
 
 import math
-from typing import Any, Optional, Tuple
+from typing import Any, NamedTuple, Optional, Tuple
 
 import numpy as np
 from sensor_msgs.msg import LaserScan
@@ -124,6 +130,15 @@ class _Crossing:
             self.least_clear = min(self.least_clear, edge_room - abs(lateral))
 
 
+class _Scan(NamedTuple):
+    """A usable scan as the task keeps it: the message, when it reached the task (its age: C.SCAN_MAX_AGE),
+    its stamp (s; 0 when unstamped) and the robot's pose when it arrived (its place without a stamp)."""
+    msg: Any
+    received: float
+    stamp: float
+    arrival_pose: np.ndarray
+
+
 class LaserPassage:
     """Passage through an opening for a task: keeps the latest scan while the task runs.
 
@@ -134,7 +149,7 @@ class LaserPassage:
     def __init__(self, task: AgentTask) -> None:
         self.task = task
         self.agent = task.agent
-        self._scan: Optional[Tuple[Any, float, np.ndarray]] = None  # (LaserScan, receive time, pose then)
+        self._scan: Optional[_Scan] = None
         self._blind_since: Optional[float] = None
         task.iface.add_subscriber(task.name, 'scan', LaserScan, self._on_scan)
 
@@ -156,7 +171,9 @@ class LaserPassage:
             pose = self.agent.position(wait=0.0)
         except TaskError:
             return                                   # no pose yet: a scan we could not place
-        self._scan = (msg, now, pose)
+        header = getattr(msg, 'header', None)
+        stamp = header.stamp.to_sec() if header is not None else 0.0
+        self._scan = _Scan(msg, now, stamp, pose)
 
     def height_now(self) -> Optional[float]:
         """The UAV's true height (arena z of base_link) by its clearance guard (clearance.py `true_z`): its GNSS
@@ -166,41 +183,55 @@ class LaserPassage:
         keeper = getattr(self.agent, 'clearance', None)
         return None if keeper is None else keeper.true_height()
 
-    def _fresh_scan(self) -> Optional[Any]:
-        """The latest scan when not older than C.SCAN_MAX_AGE and the laser is not blind, else None."""
-        if self._blind_since is not None or self._scan is None:
-            return None
-        msg, t, _pose = self._scan
-        return msg if self.agent.backend.now() - t <= C.SCAN_MAX_AGE else None
-
-    def _moved_since_scan(self, msg: Any) -> Tuple[np.ndarray, float]:
-        """The robot's motion since msg was received, in the body frame it had then: ((dx, dy), dyaw)."""
+    def _fresh_scan(self) -> Optional[_Scan]:
+        """The latest scan (with what places it) when not older than C.SCAN_MAX_AGE and the laser is not
+        blind, else None. Its msg and its pose go together: a newer scan arriving meanwhile changes neither."""
         scan = self._scan
-        if scan is None or scan[0] is not msg:
-            return np.zeros(2), 0.0
-        then, now = scan[2], self.agent.position()
-        d = world_to_body((now[0] - then[0], now[1] - then[1], 0.0), then[3])
-        return np.array([d[0], d[1]]), wrap_angle(now[3] - then[3])
+        if self._blind_since is not None or scan is None:
+            return None
+        return scan if self.agent.backend.now() - scan.received <= C.SCAN_MAX_AGE else None
 
-    def _as_now(self, msg: Any, x: float, y: float) -> Tuple[float, float]:
-        """A point (x, y) of msg's body frame in the robot's body frame now."""
-        (dx, dy), dyaw = self._moved_since_scan(msg)
-        c, s = math.cos(dyaw), math.sin(dyaw)
-        px, py = x - dx, y - dy
-        return c * px + s * py, -s * px + c * py
+    def _scan_pose(self, scan: _Scan) -> np.ndarray:
+        """The robot's pose (x, y, z, yaw) when scan was taken: the pose history at its stamp (robot_agent
+        `pose_at`: the UAL's poses carry the same clock); the pose when it arrived if it has no stamp."""
+        if scan.stamp > 0.0 and hasattr(self.agent, 'pose_at'):
+            return self.agent.pose_at(scan.stamp)
+        return scan.arrival_pose
 
-    def _see(self, msg: Any, width: float, expected: float) -> Optional[SeenOpening]:
-        """The opening in msg (body frame of now: _as_now), about `expected` m aside, or None."""
+    @staticmethod
+    def _placed(pose, x: float, y: float) -> np.ndarray:
+        """Arena (x, y) of the point (x, y) of the body frame of a robot at pose."""
+        return np.asarray(body_to_world((x, y, 0.0), pose[3]))[:2] + np.asarray(pose[:2], dtype=float)
+
+    @staticmethod
+    def _in_body(pose, point) -> Tuple[float, float]:
+        """Body (x, y) of an arena point (x, y) for a robot at pose."""
+        d = world_to_body((point[0] - pose[0], point[1] - pose[1], 0.0), pose[3])
+        return float(d[0]), float(d[1])
+
+    def _as_now(self, scan: _Scan, x: float, y: float, here=None) -> Tuple[float, float]:
+        """A point (x, y) of scan's body frame in the body frame of the robot at here (default: now),
+        placed with the pose of when the scan was taken."""
+        here = self.agent.position() if here is None else here
+        return self._in_body(here, self._placed(self._scan_pose(scan), x, y))
+
+    def _see(self, scan: _Scan, width: float, expected: float, here=None) -> Optional[SeenOpening]:
+        """The opening in scan, about `expected` m aside (body frame of the robot at here, default now), or
+        None; its `at`: where it is in the arena, placed with the pose of when the scan was taken."""
         p = self.agent.p
+        msg = scan.msg
+        here = self.agent.position() if here is None else here
+        then = self._scan_pose(scan)
         seen = find_opening(msg.ranges, msg.angle_min, msg.angle_increment, width, expected_lateral=expected,
                             tolerance=p.opening_width_tolerance, range_min=msg.range_min,
                             range_max=msg.range_max if msg.range_max > 0 else math.inf)
         if seen is None:
             return None
-        distance, lateral = self._as_now(msg, seen.distance, seen.lateral)
+        at = self._placed(then, seen.distance, seen.lateral)
+        distance, lateral = self._in_body(here, at)
         shift = lateral - seen.lateral
         return SeenOpening(lateral=lateral, distance=distance, width=seen.width, left=seen.left + shift,
-                           right=seen.right + shift)
+                           right=seen.right + shift, at=(float(at[0]), float(at[1])))
 
     # ---- the passage ------------------------------------------------------------------------------
     def kind(self) -> str:
@@ -261,13 +292,14 @@ class LaserPassage:
                       stop_when=lambda: abs(a.position()[2] - z_flown) <= a.p.position_tolerance)
             self.task.sleep(0.3)                     # a scan at that height
         for _ in range(5):                           # scans reach the task only while it runs
-            msg = self._fresh_scan()
-            if msg is not None:
+            scan = self._fresh_scan()
+            if scan is not None:
                 break
             self.task.sleep(0.1)
-        if msg is None:
+        if scan is None:
             return tuple(target)
         here = a.position()
+        msg, then = scan.msg, self._scan_pose(scan)  # the scan, from where the robot was when it was taken
         leg = np.array([target[0] - here[0], target[1] - here[1]])
         length = float(np.linalg.norm(leg))
         theta = math.atan2(leg[1], leg[0])
@@ -275,11 +307,15 @@ class LaserPassage:
             c, s = math.cos(theta - h), math.sin(theta - h)
             if c < 0.3:
                 continue
-            found = find_openings(msg.ranges, msg.angle_min + here[3] - h, msg.angle_increment, DOORWAY_WIDTH,
+            found = find_openings(msg.ranges, msg.angle_min + then[3] - h, msg.angle_increment, DOORWAY_WIDTH,
                                   tolerance=DOORWAY_TOLERANCE, range_min=msg.range_min,
                                   range_max=msg.range_max if msg.range_max > 0 else math.inf)
             if not found:
                 continue
+            # seen facing h from where the scan was taken: from here instead (the robot may have moved since)
+            dx, dy = self._in_body((here[0], here[1], 0.0, h), then[:2])
+            found = [SeenOpening(lateral=o.lateral + dy, distance=o.distance + dx, width=o.width,
+                                 left=o.left + dy, right=o.right + dy) for o in found]
             t = found[0].distance / c                # along the leg, where it meets the wall
             if t > length - 0.3:
                 continue                             # the wall is beyond the leg's end
@@ -365,12 +401,13 @@ class LaserPassage:
 
     def _check_jump(self, seen: SeenOpening, kind: str) -> None:
         """TaskError when the opening's middle moved implausibly since the last scan it was seen in. Compared
-        where it is in the arena frame (seen from the robot's pose of now: the robot's own motion between
-        the two cancels, however fast it went; a bound on speed x time let a brisk crossing look like a
-        jump)."""
+        where it is in the arena frame (`seen.at`: placed with the pose the robot had when each scan was taken,
+        so that the robot's own motion between the two cancels, however fast it went and however late each
+        scan arrived; a bound on speed x time let a brisk crossing look like a jump)."""
         now = self.agent.backend.now()
-        p = self.agent.position()
-        where = np.asarray(body_to_world((seen.distance, seen.lateral, 0.0), p[3]))[:2] + np.asarray(p[:2])
+        if seen.at is None:
+            raise ValueError('an opening not placed in the arena (_see places it)')
+        where = np.asarray(seen.at, dtype=float)
         if self._last is not None:
             moved = float(np.linalg.norm(where - self._last[2]))
             allowed = self.agent.p.opening_jump_max
@@ -379,13 +416,18 @@ class LaserPassage:
                                 f'(> {allowed:.2f} m): not going through')
         self._last = (seen, now, where)
 
-    def _command(self, v_body: np.ndarray, heading: float, msg: Optional[Any], vz: float = 0.0) -> None:
-        """Send a body-frame (vx, vy) and vz as a world velocity, facing `heading`, kept off laser returns."""
+    def _command(self, v_body: np.ndarray, heading: float, scan: Optional[_Scan], vz: float = 0.0) -> None:
+        """Send a body-frame (vx, vy) and vz as a world velocity, facing `heading`, kept off laser returns
+        (the nearest return of scan, where it is from the robot now)."""
         a = self.agent
         p = a.position()
         v = body_to_world((float(v_body[0]), float(v_body[1]), vz), p[3])
-        if msg is not None:
+        if scan is not None:
+            msg = scan.msg
             d, ang = nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
+            if math.isfinite(d):
+                x, y = self._as_now(scan, d * math.cos(ang), d * math.sin(ang), p)
+                d, ang = math.hypot(x, y), math.atan2(y, x)
             v = keep_off_return(v, p[3], d, ang, a.p.opening_keep_off)
         a.send_velocity(v, yaw_rate_to(p[3], heading))
 
@@ -441,14 +483,15 @@ class LaserPassage:
                        f'no {kind} {width:.1f} m wide centred' if self._last is not None else
                        f'no {kind} {width:.1f} m wide seen')
                 raise TaskError(f'{kind} not found ahead by the laser in {allowed:.0f} s ({why}): holding')
-            msg = self._fresh_scan()
-            seen = None if msg is None else self._see(msg, width, expected)
+            scan = self._fresh_scan()
+            here = a.position()
+            seen = None if scan is None else self._see(scan, width, expected, here)
             if seen is not None and abs(seen.lateral - expected) > SEARCH_RADIUS and self._last is None:
                 seen = None                          # another opening than the arena model's
             # the height first: at a GNSS height a metre off, the laser's plane may miss the window
-            vz, z_ok = self._vertical(height) if msg is not None else (0.0, False)
+            vz, z_ok = self._vertical(height) if scan is not None else (0.0, False)
             if seen is None:
-                self._command(np.zeros(2), heading, msg, vz)
+                self._command(np.zeros(2), heading, scan, vz)
                 task.feedback('FINDING', f'looking for the {kind} with the laser')
                 a.backend.sleep(dt)
                 continue
@@ -456,7 +499,7 @@ class LaserPassage:
             if allowed == a.p.opening_timeout:      # at the first sight: time to slide there, then to centre
                 allowed += 2.0 * abs(seen.lateral) / max(0.1, ctl.lateral_vmax)
             expected = seen.lateral
-            yaw_ok = abs(wrap_angle(a.position()[3] - heading)) <= a.p.yaw_tolerance
+            yaw_ok = abs(wrap_angle(here[3] - heading)) <= a.p.yaw_tolerance
             centred = centred + 1 if ctl.centred(seen.lateral, seen.distance) and yaw_ok and z_ok else 0
             if centred >= CENTRED_SCANS:
                 a.backend.loginfo(f'[{task.name}] centred on the {kind} ({seen.width:.2f} m wide, '
@@ -464,7 +507,7 @@ class LaserPassage:
                 return seen.lateral
             task.feedback('CENTERING', f'{kind} {seen.width:.2f} m wide, {seen.distance:.2f} m ahead, '
                                        f'{seen.lateral:+.2f} m aside')
-            self._command(ctl.centring(seen.lateral, seen.distance), heading, msg, vz)
+            self._command(ctl.centring(seen.lateral, seen.distance), heading, scan, vz)
             a.backend.sleep(dt)
 
     def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
@@ -495,12 +538,11 @@ class LaserPassage:
         # the opening is behind: openings seen then are in walls beyond (a window behind a doorway), never
         # this one. Not done, and kept to the middle, before the robot is clear of the wall by that measure,
         # whatever `length` says on GNSS (realistic seed 105: a UGV's doorway passage ended in the doorway
-        # and the next leg dragged it into the frame).
-        p0 = a.position()
-        wall = (float(np.dot(p0[:3] - start[:3], u)) + self._last[0].distance) if self._last is not None else None
+        # and the next leg dragged it into the frame). At first: where centring last placed the opening.
+        wall = float(np.dot(self._last[2] - start[:2], u[:2])) if self._last is not None else None
         beyond = WALL_PASSED + a.p.opening_keep_off + GNSS_DRIFT_MARGIN      # past the wall's face: clear
         # a point of the opening's middle line (arena frame) where it was last sensed: centred on it
-        middle = None if self._last is None else _middle_point(p0, self._last[0].lateral)
+        middle = None if self._last is None else self._last[2]
         reach = a.p.frame_radius + a.p.opening_pass_margin    # m before the near face: the frame still clear
         crossing = _Crossing()
         while True:
@@ -524,15 +566,16 @@ class LaserPassage:
                                 f'no progress for {now - best_t:.0f} s)')
             if a.ROBOT_TYPE == 'uav' and crossing.started and done < clear_at and now - best_t > WALL_STALL:
                 raise TaskError(f'no progress in the {kind}\'s wall for {now - best_t:.1f} s ({to_go:.1f} m left)')
-            msg = self._fresh_scan()
-            if msg is None:
+            scan = self._fresh_scan()
+            if scan is None:
                 self._hold(heading)                  # blind or silent laser: no motion we cannot see
                 task.feedback('HOLDING', f'in the {kind}: no usable scan')
                 a.backend.sleep(dt)
                 continue
-            seen = None if passed else self._see(msg, width, expected)
+            msg = scan.msg
+            seen = None if passed else self._see(scan, width, expected, p)
             if seen is not None and self._last is not None \
-                    and seen.distance > self._last[0].distance + a.p.opening_jump_max:
+                    and float(np.dot(np.subtract(seen.at, self._last[2]), u[:2])) > a.p.opening_jump_max:
                 seen = None          # an opening in a wall beyond (across the room), not the one passed
             lateral, half = None, None               # m off the middle (body y), the opening's half width
             if seen is not None:
@@ -545,7 +588,7 @@ class LaserPassage:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     # its edges beside the robot: keep to the middle
-                    lateral = self._as_now(msg, 0.0, 0.5 * (left - right))[1]
+                    lateral = self._as_now(scan, 0.0, 0.5 * (left - right), p)[1]
                     half = 0.5 * (left + right)
                     middle = _middle_point(p, lateral)
                 elif middle is not None:
@@ -562,7 +605,7 @@ class LaserPassage:
                 best, best_t = done, now             # the wall's stall clock starts at its entry
             task.feedback('PASSING', f'through the {kind}: {to_go:.1f} m to go'
                           + ('' if lateral is None else f', {lateral:+.2f} m aside') + note)
-            self._command(v, heading, msg, self._keep_height(height, crossing.started))
+            self._command(v, heading, scan, self._keep_height(height, crossing.started))
             a.backend.sleep(dt)
 
     def _pass_velocity(self, ctl: OpeningPassage, crossing: '_Crossing', lateral: Optional[float],
@@ -625,11 +668,11 @@ class LaserPassage:
             if a.backend.now() - t0 > limit:
                 raise TaskError(f'{why}; backing out not done in {limit:.0f} s ({left:.1f} m left): '
                                 'holding') from why
-            msg = self._fresh_scan()
-            if msg is None:
+            scan = self._fresh_scan()
+            if scan is None:
                 self._hold(heading)
                 task.feedback('HOLDING', f'backing out of the {kind}: no usable scan')
             else:
                 task.feedback('BACKING_OUT', f'out of the {kind} the way it came: {left:.1f} m to go')
-                self._command(np.array([-a.p.opening_speed, 0.0]), heading, msg)
+                self._command(np.array([-a.p.opening_speed, 0.0]), heading, scan)
             a.backend.sleep(dt)
