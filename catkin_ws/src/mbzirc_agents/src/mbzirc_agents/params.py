@@ -76,6 +76,11 @@ class AgentParams:
     home_landing_offset: float = _param(0.5, "m off its pad's centre a UAV aims its landing, away from the other "
                                         "UAVs' pads (tasks/uav_motion.landing_spot): about the GNSS error of one "
                                         'fix, well inside HOME_PAD_RADIUS (1.5 m); 0: the centre')
+    pad_laser_fix: bool = _param(True, 'going home, a UAV corrects its GNSS error over the pad (and again low over '
+                                 'it) by its laser on the buildings\' outer walls (pad_fix.py) before it lands; '
+                                 'false: the landing is flown on GNSS')
+    pad_approach_height: float = _param(1.0, 'm above the ground (true, by the altimeter) a UAV goes down to over '
+                                        'its pad by a go-to before the laser fix and the UAL\'s landing')
     facade_holders: List[List[float]] = _param(_points(C.FACADE_HOLDERS), 'x, y, z of the facade fire holders '
                                                'search_facade visits when its goal has no path', lengths=(3,))
     facade_standoff: float = _param(C.FACADE_STANDOFF, 'm in front of a facade fire holder to check it')

@@ -18,10 +18,13 @@ from mbzirc_arena.routing import plan_2d
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..leg_guard import LegGuard
+from ..pad_fix import face_errors, gnss_error
 from ..wall_clearance import off_the_walls
 from .common import parse_path, parse_pose
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
+PAD_FIX_TIME = 0.6     # s of scans (10 Hz) whose observations make one laser fix over the pad
+LASER_HEIGHT = 0.1     # m of the laser over the reported z (base_link -> laser_link)
 FLYING = C.UAL_FLYING
 
 
@@ -104,25 +107,32 @@ class Land(AgentTask):
 
     def run(self, ud) -> str:
         a = self.agent
-        p = a.position()
         if a.ual_state in LANDED:
             a.free(free_all=True)
             self.result['message'] = 'already landed'
             return C.SUCCESS
-        half = a.p.hold_half_size
-        self.feedback('WAITING_REGION', 'reserving the landing column')
-        a.reserve(self, 'land', column_box(p[0], p[1], a.arena[2], p[2] + half, half))
-        self.feedback('LANDING', f'landing from z {p[2]:.1f}')
-        try:
-            srv = a.iface.add_client('ual/land', LandSrv)
-            srv(LandRequest(blocking=False))
-        except Exception as e:
-            raise TaskError(f'ual/land failed: {e}')
-        self.wait_for(lambda: a.ual_state in LANDED, p[2] / 0.4 + 20.0, 'the landing to finish')
-        a.free(free_all=True)
-        a.parked = False                  # idle() parks it again where it landed
+        p = a.position()
+        land_in_column(self, p[0], p[1])
         self.result['message'] = 'landed'
         return C.SUCCESS
+
+
+def land_in_column(task: AgentTask, x: float, y: float) -> None:
+    """Reserve the landing column over (x, y), land where the UAV is, free every region."""
+    a = task.agent
+    p = a.position()
+    half = a.p.hold_half_size
+    task.feedback('WAITING_REGION', 'reserving the landing column')
+    a.reserve(task, 'land', column_box(x, y, a.arena[2], p[2] + half, half))
+    task.feedback('LANDING', f'landing from z {p[2]:.1f}')
+    try:
+        srv = a.iface.add_client('ual/land', LandSrv)
+        srv(LandRequest(blocking=False))
+    except Exception as e:
+        raise TaskError(f'ual/land failed: {e}')
+    task.wait_for(lambda: a.ual_state in LANDED, p[2] / 0.4 + 20.0, 'the landing to finish')
+    a.free(free_all=True)
+    a.parked = False                  # idle() parks it again where it landed
 
 
 HEIGHT_FIRST = 0.3   # m: an indoor leg changing height by more changes it first, where the UAV is
@@ -339,14 +349,19 @@ def other_uav_homes(agent_id) -> list:
 class GoHomeAndRefill(AgentTask):
     """Fly home at the cruise altitude, land, and wait for the reset (water refilled / new blanket).
 
-    The landing is flown on GNSS, about a metre off the aimed point, and the reset is given only near the
-    pad: no reset within ~reland_after s -> take off ~reland_height and land on the pad again (the GNSS
-    error has moved since), at most ~reland_attempts times; then the ~refill_timeout wait, and failure
+    Over home the UAV measures its GNSS error by its laser on the buildings' outline and lands on its pad
+    (_land_on_pad); where the laser sees no outer wall the landing is flown on GNSS, about a metre off the
+    aimed point, and the reset is given only near the pad: no reset within ~reland_after s -> take off
+    ~reland_height and land on the pad again (the GNSS error has moved since), at most ~reland_attempts times; then the ~refill_timeout wait, and failure
     (seen: realistic seed 102, the blanket UAV 1.3-1.5 m off its pad waited for a blanket the whole trial).
     Started landed away from home (after such a failure), it takes off and lands on the pad first.
     The aimed point is ~home_landing_offset m off the pad's centre, away from the other UAVs' pads
     (landing_spot): the neighbours' GNSS errors then leave them further apart.
     """
+
+    def __init__(self, name, agent, **args) -> None:
+        super().__init__(name, agent, **args)
+        self.guard = LegGuard(self)            # its scan subscription (the laser fix over the pad)
 
     def run(self, ud) -> str:
         a = self.agent
@@ -387,7 +402,7 @@ class GoHomeAndRefill(AgentTask):
         return C.SUCCESS
 
     def _fly_home_and_land(self, home) -> None:
-        """From the air: climb on the spot to at least the cruise altitude, fly over home, land."""
+        """From the air: climb on the spot to at least the cruise altitude, fly over home, land on the pad."""
         a = self.agent
         p = a.position()
         z = max(p[2], a.p.cruise_altitude)
@@ -397,7 +412,67 @@ class GoHomeAndRefill(AgentTask):
         x, y = landing_spot(home, other_uav_homes(a.agent_id), a.p.home_landing_offset)
         self.feedback('GOING_HOME', f'flying home at z {z:.1f}')
         self.call_task_or_raise('go_to', {'waypoint': ((x, y, z), None)}, 'going home')
-        self.call_task_or_raise('land', {}, 'landing')
+        if a.p.pad_laser_fix:
+            self._land_on_pad(home, (x, y))
+        else:
+            self.call_task_or_raise('land', {}, 'landing')
+
+    def _land_on_pad(self, home, spot) -> None:
+        """Over the landing spot (GNSS): over it by the laser (pad_fix: the GNSS error measured on the
+        buildings' outline), down the landing column on the pad to ~pad_approach_height (true, the altimeter's),
+        over it by the laser again (the error wandered on the way down), and land from there. Without an
+        observation (no fresh scan, no outer face in view) a direction is flown on GNSS, as before.
+
+        Why: the reset is given only on the pad, and a landing flown on GNSS comes down its error off the
+        aimed point, a metre or more at times: realistic seed 105, UAV 2 landed off its pad three times and
+        was never refilled (idle 716 s); seeds 111, 113: landings again, 20-30 s each. Going down by a go-to
+        (~1.2 m/s) rather than the UAL's landing (0.8 m/s) also makes the way down from a 12 m transit
+        altitude ~4 s shorter."""
+        a = self.agent
+        here = a.position()
+        err = self._gnss_error('over the pad')
+        if err is not None:
+            self.call_task_or_raise('go_to', {'waypoint': ((spot[0] + err[0], spot[1] + err[1], here[2]), None)},
+                                    'over the pad by the laser')
+        half = a.p.hold_half_size
+        pad = (float(home[0]), float(home[1]))          # the column stands on the pad (public), not on GNSS
+        self.feedback('WAITING_REGION', 'reserving the landing column')
+        a.reserve(self, 'land', column_box(pad[0], pad[1], a.arena[2], a.position()[2] + half, half))
+        here = a.position()
+        low = a.at_true_height((here[0], here[1], a.arena[2] + a.p.pad_approach_height))
+        if here[2] > low[2] + a.p.position_tolerance:
+            self.feedback('DESCENDING', f'down to {a.p.pad_approach_height:.1f} m over the pad')
+            a.move_to(self, low, None, 'down over the pad',
+                      stop_when=lambda: a.position()[2] <= low[2] + a.p.position_tolerance)
+        err = self._gnss_error('low over the pad')
+        if err is not None:
+            here = a.position()
+            target = (spot[0] + err[0], spot[1] + err[1], here[2])
+            if math.hypot(target[0] - here[0], target[1] - here[1]) > 0.1:
+                a.move_to(self, target, None, 'over the pad by the laser, low')
+        land_in_column(self, *pad)
+
+    def _gnss_error(self, what: str):
+        """(ex, ey) of the reported pose by the laser on the buildings' outline (pad_fix), over ~PAD_FIX_TIME s
+        of scans; an unobserved direction 0; None without any observation (logged)."""
+        a = self.agent
+        obs, end = [], a.backend.now() + PAD_FIX_TIME
+        while True:
+            points = self.guard.points()
+            if points is not None:
+                here = a.position()
+                obs += face_errors(points, here[:2], here[2] + LASER_HEIGHT)
+            if a.backend.now() >= end:
+                break
+            self.sleep(0.1)
+        err, seen = gnss_error(obs)
+        if not seen:
+            a.backend.logwarn(f'[{self.name}] {what}: no outer wall of the buildings in the laser\'s view: the '
+                              'landing is flown on GNSS')
+            return None
+        a.backend.loginfo(f'[{self.name}] {what}: GNSS error by the laser on the outline ({err[0]:.2f}, '
+                          f'{err[1]:.2f}) m, {seen} direction(s) observed')
+        return float(err[0]), float(err[1])
 
 
 def _fmt(p) -> str:
