@@ -251,20 +251,53 @@ def test_a_doubtful_track_that_reads_cold_gets_no_water(scenes, updates, std):
     assert sc.statuses == [] and sc.ual.water == 2.0
 
 
-@pytest.mark.parametrize('water,out', [(0.6, False), (1.2, False), (2.0, False)])
-def test_cold_only_after_the_tank_ran_dry(scenes, water, out):
-    """Hot until the last drop, cold after it: a fire being filled cools in the thermal image, so it may be
-    just short of full (seen: 1.2 L left a fire at 92 %) and stays active for a top-up, however much water
-    was pumped (how much a fire needs is unknown: 0.8-1.3x nominal in the real arena)."""
+@pytest.mark.parametrize('water', [0.6, 1.2, 2.0])
+def test_a_fire_hot_while_any_water_flowed_is_left_for_a_top_up_when_the_tank_runs_dry(scenes, water):
+    """Hot while water flows, whatever the tank held, cold once the pump stopped on the dry tank: it never read
+    cold while water flowed at it, so no soak began, and how much water a fire needs is unknown (0.8-1.3x
+    nominal in the real arena): it stays active for a top-up, with no verdict from the litres pumped."""
     sc = scenes(hot_until=0.0)
     sc.ual.water = water
-    sc.hot = lambda: sc.ual.water > 0.1
+    sc.hot = lambda: sc.ual.pump
     s = sc.extinguish()
-    assert s.status == 'succeeded' and s.result.extinguished is out, s.result.message
-    assert sc.statuses == ([C.STATUS_EXTINGUISHED] if out else [])
-    assert sc.ual.water <= 0.1
-    if not out:
-        assert 'top-up' in s.result.message
+    assert s.status == 'succeeded' and s.result.extinguished is False, s.result.message
+    assert sc.statuses == [] and sc.ual.water <= 0.1
+    assert 'top-up' in s.result.message
+
+
+@pytest.mark.parametrize('water', [0.6, 1.2])
+def test_a_fire_that_read_cold_with_water_flowing_and_whose_tank_ran_dry_while_soaking_is_confirmed_without_water(
+        scenes, water):
+    """Cold with water flowing 0.2 L before the tank ran dry: the soak began and the tank ran dry in it. The
+    robot confirms with the pump off, as after a whole soak: 6 cold answers in a row in the raw thermal image
+    (at its wall's level) and it is out; no top-up trip for a fire already put out. (Before: 'the tank ran dry
+    before 6 cold answers (0 so far)' on fires put out by their first tank, ual_sim's realistic profile:
+    35 of 72 closed-loop pours, test_indoor_closed_loop.py.)"""
+    sc = scenes(hot_until=0.0)
+    sc.ual.water = water
+    sc.hot = lambda: sc.ual.water > 0.2
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished is True, s.result.message
+    assert sc.statuses == [C.STATUS_EXTINGUISHED] and sc.ual.water <= 0.1
+    assert any('ran dry while soaking' in m for m in sc.be.infos), sc.be.infos
+
+
+def test_a_fire_that_shows_hot_again_after_a_soak_cut_short_by_a_dry_tank_is_left_for_a_top_up(scenes):
+    """Cold with water flowing, the tank dry in the soak, then hot again with the pump off: it still burns,
+    and there is no water to give it: not out, left for a top-up."""
+    sc = scenes(hot_until=0.0)
+    sc.ual.water = 0.6
+    cold_from = []
+
+    def hot():
+        if sc.ual.water > 0.2:
+            return True
+        cold_from.append(sc.be.clock.now())
+        return sc.be.clock.now() - cold_from[0] > 1.5        # cold for 1.5 s, then hot again
+    sc.hot = hot
+    s = sc.extinguish()
+    assert s.status == 'succeeded' and s.result.extinguished is False, s.result.message
+    assert sc.statuses == [] and 'top-up' in s.result.message
 
 
 def test_the_robot_turns_to_the_hot_spot_before_pumping(scenes):

@@ -32,6 +32,8 @@ AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
 AIM_MAX_AGE = 0.5          # s: an older detection no longer turns the robot while it pumps
 RAW_TURN_SETTLE = 0.5      # s after a turn on the raw image before a frame may turn the robot again
+WATER_PERIOD = 0.5         # s of one round of the watering loop (feedback, wall checks, a hot/cold answer)
+STEER_PERIOD = 0.1         # s between two corrections of the aim while pumping (`_steer_for`)
 FROZEN_HEIGHT_STEP = 0.02  # m: a frozen aim's height set-point is re-sent when it moved this much
 RAW_THERMAL_TOPIC = 'teraranger_evo_thermal/raw_temp_array'   # the thermal camera's 32 x 32 deg C
 LOOK_TURN = 0.5            # rad of a look beside the heading for a fire out of view (the 33 deg view overlaps)
@@ -598,7 +600,15 @@ class ExtinguishIndoorFire(AgentTask):
             pumping = True
             start = a.backend.now()
             flow = WaterFlow(start)
-            while not pumping or not a.water_empty():      # the pump-off confirmation needs no water
+            while not pumping or not a.water_empty() or soak.soaking:   # the pump-off confirmation needs no water
+                if pumping and a.water_empty():          # dry while soaking: confirm what it has
+                    a.stop_pump()
+                    pumping = False
+                    soak.done = True
+                    cold.restart()
+                    a.backend.loginfo(f'[{self.name}] fire {fire_id}: the tank ran dry while soaking it (it read cold '
+                                      f'with water flowing): out once it reads cold {cold.checks} times in a row '
+                                      'without water')
                 self.check_preempt()
                 now = a.backend.now()
                 if now - start > a.p.extinguish_timeout:
@@ -620,12 +630,7 @@ class ExtinguishIndoorFire(AgentTask):
                 else:
                     self.feedback('TOPPING_UP', f'fire {fire_id} reads cold but was never put out: water '
                                                 f'{a.water_level:.2f} L')
-                self.sleep(0.5)
-                if frozen:
-                    self._hold_frozen_height(pose[3])
-                    pose[3] = self._steer_on_raw_image(pose[3])
-                else:
-                    pose[3] = self._keep_aim(pose[3])
+                pose[3] = self._steer_for(WATER_PERIOD, pose[3], frozen)
                 if self.aim_z is not None:
                     pose[2] = self.aim_z                         # the watering pose climbs with the aim
                 here = a.position()
@@ -707,7 +712,9 @@ class ExtinguishIndoorFire(AgentTask):
             c.lock_on_latest()
             c.answer()                                   # the frames so far are the hot fire's
             return True
-        if not c.locked and c.lock_on_latest(steady=True):
+        if not c.locked and c.was_locked:
+            c.lock_on_latest(steady=True, relock=True)   # the fire unlocked by a turn of the aim, however faint
+        elif not c.locked and c.lock_on_latest(steady=True):
             self.agent.backend.loginfo(f'[{self.name}] fire {fire_id} not reported by the detector but '
                                        f'{c.locked_contrast:.1f} degC over its wall in the raw thermal image: '
                                        'seen hot, watered until it reads at its wall\'s level')
@@ -741,6 +748,25 @@ class ExtinguishIndoorFire(AgentTask):
             return yaw
         self._turn_in_place(new_yaw)
         return new_yaw
+
+    def _steer_for(self, seconds: float, yaw: float, frozen: bool) -> float:
+        """While pumping, for `seconds`: every STEER_PERIOD s the aim (heading yaw, and a UAV's height) steered
+        onto the fire, by the detector's sighting (`_keep_aim`) or, frozen, the raw thermal image
+        (`_steer_on_raw_image`, the height held by the altimeter); the heading it ends at. Why every STEER_PERIOD
+        and not once a WATER_PERIOD: gusts push a UAV +-0.2-0.4 m sideways within a second or two, and the jet
+        with it, 1:1 (ual_sim's realistic profile, closed loop test_indoor_closed_loop.py: the jet's end
+        0.1-0.3 m beside the hole for much of a tank when the aim was corrected twice a second)."""
+        now = self.agent.backend.now
+        end = now() + seconds
+        while True:
+            self.sleep(max(0.0, min(STEER_PERIOD, end - now())))
+            if frozen:
+                self._hold_frozen_height(yaw)
+                yaw = self._steer_on_raw_image(yaw)
+            else:
+                yaw = self._keep_aim(yaw)
+            if now() >= end - 1e-6:
+                return yaw
 
     def _freeze_aim(self, frozen: bool) -> None:
         """Freeze (or free) the aim that put water in: the heading is held as it is (no sighting turns it),
@@ -776,15 +802,39 @@ class ExtinguishIndoorFire(AgentTask):
         if spot is None or not spot[3] or spot[2] < self.raw_turn_time + RAW_TURN_SETTLE:
             return yaw
         bearing = pixel_bearing(spot[0], a.p.forward_camera_fov)
-        if abs(bearing) < a.p.aim_bearing_tolerance:
+        climb = self._raw_climb(spot)
+        turn = abs(bearing) >= a.p.aim_bearing_tolerance
+        if not turn and climb is None:
             return yaw
-        new_yaw = float(a.pose_at(spot[2])[3]) + bearing
+        new_yaw = float(a.pose_at(spot[2])[3]) + bearing if turn else yaw
+        if climb is not None:
+            self.aim_z += climb
+            if self.frozen_true_z is not None:
+                self.frozen_true_z += climb
         self._turn_in_place(new_yaw)
         self.raw_turn_time = a.backend.now()
-        self.contrast.clear()
-        a.backend.loginfo_throttle(2.0, f'[{self.name}] frozen aim turned {math.degrees(bearing):+.1f} deg onto '
-                                        'the warm area of the raw thermal image')
+        self.contrast.unlock()
+        a.backend.loginfo_throttle(2.0, f'[{self.name}] frozen aim turned {math.degrees(new_yaw - yaw):+.1f} deg, '
+                                        f'{climb or 0.0:+.2f} m up onto the warm area of the raw thermal image')
         return new_yaw
+
+    def _raw_climb(self, spot) -> Optional[float]:
+        """m a UAV's frozen aim climbs to put the raw image's warm spot (column, row, time, whole) where the jet
+        lands (~jet_rise above the optical axis at ~indoor_fire_distance), at most ~aim_height_step and within
+        ~aim_height_range of the watering height; None when it is there (~aim_height_tolerance) or cannot climb.
+        Why: the aim frozen on the altimeter holds the height the detector last saw the fire at, and the
+        spot's row was not followed while the fire faded (ual_sim's realistic profile, closed loop
+        test_indoor_closed_loop.py: the jet's end 0.1-0.2 m off the hole once the detector lost the fire)."""
+        a = self.agent
+        if a.ROBOT_TYPE != 'uav' or self.watering_z is None or self.aim_z is None:
+            return None
+        error = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot[1], a.p.forward_camera_fov)) - a.p.jet_rise
+        if abs(error) < a.p.aim_height_tolerance:
+            return None
+        step = max(-a.p.aim_height_step, min(a.p.aim_height_step, error))
+        reach = a.p.aim_height_range
+        z = max(self.watering_z - reach, min(self.watering_z + reach, self.aim_z + step))
+        return None if abs(z - self.aim_z) < 1e-3 else z - self.aim_z
 
     def _hold_frozen_height(self, yaw: float) -> None:
         """The frozen aim's height set-point follows the altimeter's estimate of the vertical GNSS error, so

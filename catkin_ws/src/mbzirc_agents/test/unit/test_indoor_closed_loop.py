@@ -1,0 +1,33 @@
+"""extinguish_indoor_fire in closed loop with ual_sim's realistic world (sim_ual.py): the real task, the real
+fire detector, the simulator's renderer, GNSS bias, gusts and jet; the simulator only referees.
+
+Why: the scripted cameras of test_indoor_water.py test the rules one at a time; whether one tank puts out a
+fire needing 0.8-1.3 L, and whether "out" is said only of a fire that is out, only the simulator's truth tells.
+Seeds and holders here were not used to tune the task (bench/bench_indoor_pour.py runs the larger matrix)."""
+import pytest
+
+from sim_ual import pour
+
+POURS = [(seed, holder) for seed in (31, 32, 33, 34) for holder in ('in0_w', 'in1_e', 'in2_w')]
+
+
+@pytest.fixture(scope='module')
+def outcomes():
+    return [pour(seed, holder=holder) for seed, holder in POURS]
+
+
+def test_a_fire_is_never_judged_out_short_of_the_water_it_needs(outcomes):
+    """The verdict comes from the thermal camera (cold with the pump off), never from litres pumped: no pour
+    says 'out' of a fire the referee still counts burning (before the raw-image rules: one at 99.9 %)."""
+    wrong = [(p, o['progress'], o['message']) for p, o in zip(POURS, outcomes)
+             if o['extinguished'] and o['progress'] < 1.0]
+    assert not wrong, wrong
+
+
+def test_one_tank_puts_out_and_confirms_nearly_every_indoor_fire(outcomes):
+    """A 2 L tank, fires needing 0.8-1.3 L, GNSS bias and gusts: put out and confirmed by the first tank in
+    at least 10 of 12 pours (before the aim was steered every 0.1 s, the lock taken again after a turn and a
+    soak cut short by a dry tank confirmed: 26 of 72 over seeds 1-12, 35 left for a top-up trip when out)."""
+    good = [p for p, o in zip(POURS, outcomes) if o['extinguished'] and o['progress'] >= 1.0]
+    detail = [(p, round(o['progress'], 3), o['message'][:60]) for p, o in zip(POURS, outcomes)]
+    assert len(good) >= 10, detail
