@@ -838,3 +838,34 @@ def test_a_window_that_truly_jumps_is_caught_in_late_scans():
     from mbzirc_agents.agent_task import TaskError
     with pytest.raises(TaskError, match=r'jumped (0\.9\d|1\.\d\d) m'):
         scans_late(TURNING, [0.0, 0.0, 0.0, 0.4], window_shift=lambda t: 1.0 if t > 2.0 else 0.0)
+
+
+def test_realistic_108_a_uav_looking_beside_a_watering_pose_for_a_fire_out_of_view_keeps_off_the_wall(uav):
+    """Realistic seed 108: UAV 2 hit the interior wall it faced on floor 2 while looking beside, above and
+    below a watering pose for a fire out of its view (~25 s there while its GNSS error moved ~1 m). Here the
+    watering pose is 1.3 m off facade B's inner face by the truth, facing along it; the fire is not in view
+    (cold) and the error drifts 1.3 m towards the facade during the look (0.2 m/s): the look keeps off the wall by the
+    laser, as the watering does."""
+    from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList
+    agent, ual, be, scene = uav
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    nearest = beside_facade_b(be, ual, scene, (13.0, 8.2, 6.2), 0.0)
+    o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_ACTIVE, num_updates=50)
+    o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = 14.5, 8.2, 6.2
+    o.pose.covariance = [0.0] * 36
+    o.pose.covariance[0] = o.pose.covariance[7] = o.pose.covariance[14] = 0.2 ** 2
+    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+    looking = []
+
+    def drift_while_looking():
+        while not scene.stop and ual.gnss_bias[1] < 1.3:
+            if looking or any('LOOKING' in str(f) for f in s.feedback[-3:]):
+                looking.append(True)
+                ual.gnss_bias = ual.gnss_bias + np.array([0.0, 0.02, 0.0])
+            be.clock.sleep(0.1)
+    s = be.servers['extinguish_indoor_fire_action']
+    be.clock.start_thread(drift_while_looking, name='drift while looking')
+    s.send(ExtinguishIndoorFireGoal(fire_id=7))
+    s.wait(200)
+    assert looking, 'the UAV never looked around'
+    assert nearest[0] > UAV_R + 0.3, nearest[0]       # (before: it went through the wall)

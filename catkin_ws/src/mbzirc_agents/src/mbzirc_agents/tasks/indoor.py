@@ -442,8 +442,16 @@ class ExtinguishIndoorFire(AgentTask):
             level = self.aim_z is None or abs(here[2] - z) <= a.p.aim_height_tolerance   # (fix noise: not /2)
             if abs(wrap_angle(here[3] - yaw)) <= a.p.aim_bearing_tolerance / 2 and level:
                 break
-            self.sleep(0.1)
+            self._wait_off_walls(0.1, yaw)
         return yaw
+
+    def _wait_off_walls(self, seconds: float, yaw: float) -> None:
+        """Sleep, then back off (heading yaw) from walls the laser sees nearer than ~min_wall_clearance. Every
+        wait at a watering pose keeps off the walls this way, as the watering does: the UAL holds the GNSS
+        set-point, and the robot's true place drifts with the GNSS error (realistic seed 108: UAV 2 hit the
+        wall it faced while looking beside, above and below the watering pose, ~25 s, its error moving ~1 m)."""
+        self.sleep(seconds)
+        self._keep_off_walls(yaw)
 
     def _look_around(self, yaw: float) -> Optional[float]:
         """The fire not in sight from the watering pose (heading yaw): look for a warm area in the raw thermal
@@ -476,7 +484,7 @@ class ExtinguishIndoorFire(AgentTask):
                 if spot is not None and spot[2] > since:
                     break
                 spot = None
-                self.sleep(0.1)
+                self._wait_off_walls(0.1, yaw + turn)
             if spot is None:
                 continue
             fov = a.p.forward_camera_fov
@@ -874,8 +882,7 @@ class ExtinguishIndoorFire(AgentTask):
                 return True
             if self.agent.backend.now() >= end:
                 return False
-            self.sleep(0.25)
-            self._keep_off_walls(self.agent.position()[3])
+            self._wait_off_walls(0.25, self.agent.position()[3])
 
     def _well_localised(self, fire_id: int) -> bool:
         """A confirmed track known to ~top_up_max_std: a real fire, not a stray estimate.
