@@ -8,6 +8,7 @@ import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
 from agent_test_utils import SimRobots, client, done, pose, run, wait_wall
+from mbzirc_agents.tasks.uav_motion import landing_spot, other_uav_homes
 from mbzirc_comm_objs.msg import GoToGoal, TakeOffGoal
 from std_msgs.msg import Header
 from ual_sim.msg import Score
@@ -144,9 +145,11 @@ class TestUavMotion(unittest.TestCase):
         state, res = run(2, 'hover', 'Hover', 30, duration=1.0)
         self.assertEqual(state, GoalStatus.ABORTED)
         self.assertIn('heartbeat', res.message)
-        # after ~return_home_timeout (8 s of wall time) it goes home (0, 0) and lands
-        self.assertTrue(wait_wall(lambda: math.dist(self.sim.poses[2], (0, 0, 0)) < 0.5, 60),
-                        f'not home: {self.sim.poses[2]}')
+        # after ~return_home_timeout (8 s of wall time) it goes home and lands on its pad (0, 0), on the spot
+        # it aims at there (~home_landing_offset, 0.5 m, off the centre away from the neighbours' pads)
+        spot = landing_spot((0.0, 0.0), other_uav_homes('2'), 0.5) + (0.0,)
+        self.assertTrue(wait_wall(lambda: math.dist(self.sim.poses[2], spot) < 0.3, 60),
+                        f'not home: {self.sim.poses[2]}, its landing spot {spot}')
         # the heartbeat comes back: goals are accepted again
         beat = rospy.Timer(rospy.Duration(0.5), lambda e: hb.publish(Header(stamp=rospy.Time.now())))
         time.sleep(1.0)

@@ -822,7 +822,8 @@ class ExtinguishIndoorFire(AgentTask):
         self._turn_in_place(new_yaw)
         self.raw_turn_time = a.backend.now()
         self.contrast.unlock()
-        a.backend.loginfo_throttle(2.0, f'[{self.name}] frozen aim turned {math.degrees(new_yaw - yaw):+.1f} deg, '
+        turned = math.degrees(wrap_angle(new_yaw - yaw))
+        a.backend.loginfo_throttle(2.0, f'[{self.name}] frozen aim turned {turned:+.1f} deg, '
                                         f'{climb or 0.0:+.2f} m up onto the warm area of the raw thermal image')
         return new_yaw
 
