@@ -10,16 +10,18 @@ import math
 from typing import Optional, Sequence
 
 import numpy as np
-from mbzirc_arena.buildings import nearest_face, standing_at
+from mbzirc_arena.buildings import open_face, standing_at
 
 
 # ---- facades -----------------------------------------------------------------------------------------
 def facade_standoff(fire: Sequence[float], buildings: Sequence[Sequence[float]], distance: float) -> tuple:
-    """((x, y, z), yaw) of a robot `distance` m out from the facade of `fire`, facing the wall."""
-    normal, _ = nearest_face(fire, standing_at(fire, buildings))
+    """((x, y, z), yaw) of a robot `distance` m out from the facade of `fire` (the nearest wall rising to its
+    height whose standoff is in the open: buildings.open_face), facing the wall; out from the wall's known
+    plane, not from `fire`, whose estimate may lie in the wall or in front of it by its GNSS error."""
+    normal, foot = open_face(fire, standing_at(fire, buildings), distance)
     if normal is None:
         raise ValueError('no building')
-    pos = (fire[0] + normal[0] * distance, fire[1] + normal[1] * distance, fire[2])
+    pos = (foot[0] + normal[0] * distance, foot[1] + normal[1] * distance, fire[2])
     yaw = math.atan2(-normal[1], -normal[0])
     return pos, yaw
 

@@ -61,3 +61,13 @@ def test_a_facade_fire_estimate_snaps_to_its_known_holder():
     assert tuple(known_holder((a4[0] + 0.9, a4[1] - 0.7, a4[2] - 0.4))) == tuple(a4)
     far = (5.0, 5.0, 5.0)
     assert tuple(known_holder(far)) == far
+
+
+def test_realistic_111_a_standoff_for_an_estimate_near_the_extension_corner_stands_in_the_open():
+    """A_4's estimate 1.8 m into the tower (beyond the holder snap), nearer the tower's east face, which the
+    extension hides below its 4.5 m roof: the standoff is on facade A, 2 m out from its plane, not inside the
+    extension (before: (25.7, 17.7), refused as inside the building outline) nor 0.2 m from facade A."""
+    from mbzirc_arena.buildings import in_footprint
+    pos, yaw = g.facade_standoff((23.7, 17.7, 0.8), C.BUILDINGS, 2.0)
+    assert pos == pytest.approx((23.7, 21.5, 0.8)) and yaw == pytest.approx(-math.pi / 2)
+    assert not in_footprint(pos, C.BUILDINGS)

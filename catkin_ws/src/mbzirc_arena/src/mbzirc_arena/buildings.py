@@ -47,6 +47,29 @@ def nearest_face(p: Sequence[float], footprints: Sequence[Sequence[float]]) -> t
     return best
 
 
+def open_face(p: Sequence[float], footprints: Sequence[Sequence[float]], distance: float) -> tuple:
+    """(outward normal (nx, ny), foot (x, y): p's nearest point on it) of the nearest wall of footprints whose
+    point `distance` m out from the foot lies outside every footprint; the nearest wall when none does;
+    (None, None) without buildings. Why: a facade fire estimate carries the GNSS error of the poses that
+    placed it, and near a corner the nearest wall may be one another building hides (the tower's east face
+    below the extension's roof: realistic seed 111), whose standoff lies inside that building."""
+    faces = []
+    for b in footprints:
+        x0, y0, x1, y1 = b[:4]
+        for normal, a, c in (((-1.0, 0.0), (x0, y0), (x0, y1)), ((1.0, 0.0), (x1, y0), (x1, y1)),
+                             ((0.0, -1.0), (x0, y0), (x1, y0)), ((0.0, 1.0), (x0, y1), (x1, y1))):
+            fx = min(max(p[0], min(a[0], c[0])), max(a[0], c[0]))
+            fy = min(max(p[1], min(a[1], c[1])), max(a[1], c[1]))
+            faces.append((_dist_point_segment(p, a, c), normal, (fx, fy)))
+    if not faces:
+        return None, None
+    faces.sort(key=lambda f: f[0])
+    for _, normal, foot in faces:
+        if not in_footprint((foot[0] + normal[0] * distance, foot[1] + normal[1] * distance), footprints):
+            return normal, foot
+    return faces[0][1], faces[0][2]
+
+
 def in_footprint(p: Sequence[float], footprints: Sequence[Sequence[float]], margin: float = 0.0) -> bool:
     """True when p (xy) is inside a building footprint grown by margin (shrunk when margin < 0)."""
     return any(b[0] - margin <= p[0] <= b[2] + margin and b[1] - margin <= p[1] <= b[3] + margin

@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from typing import Optional
 
+from mbzirc_arena.holders import known_holder
+
 from . import constants as C
 from . import geometry as G
 from .command import Command
@@ -180,7 +182,7 @@ class WaterDecider(Decider):
             if last is not None and last.task == C.GO_TO_FACADE_FIRE and last.target == fire.fire_id:
                 return Command(a.agent_id, C.EXTINGUISH_FACADE_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
                                f"water on facade fire {fire.fire_id}, floor {floor}", fire.fire_id)
-            vp = G.viewpoint(fire.position, standoff=C.FACADE_STANDOFF)
+            vp = G.viewpoint(tuple(known_holder(fire.position)), standoff=C.FACADE_STANDOFF)
             close = math.dist(a.position, fire.position) <= C.FACADE_STANDOFF + 1.5 and abs(a.z - fire.z) < 1.5
             if not close and not at(a, vp):
                 return self.router.transit(a, vp, f"to facade fire {fire.fire_id}, floor {floor}", floor)

@@ -615,3 +615,22 @@ def test_a_robot_a_restarted_central_unit_saw_only_landed_and_now_uninitialized_
     assert not s.crashed                            # not at once
     cmds = uav3(10.0 + CRASH_CONFIRM_S, C.UAL_UNINITIALIZED)
     assert "3" in s.crashed and s.broken("3") and not cmds
+
+
+def test_realistic_111_a_facade_fire_estimated_nearer_the_face_the_extension_hides_is_watered_from_its_holder():
+    """Realistic seed 111: facade fire A_4 (23.7, 19.5, 0.75; facade A, 0.5 m from the tower's east corner)
+    estimated 1.8 m into the tower, nearer its east face, which the extension hides below 4.5 m: the
+    viewpoint went 2 m east of that, inside the extension, every transit to it was refused ('inside the
+    building outline') and the fire was never watered. The viewpoint is now on the nearest facade whose
+    viewpoint is open at that height, out from the facade's known plane (not from the estimate: 1.8 m inside,
+    its viewpoint would stand 0.2 m from the wall)."""
+    s = Strategy(StrategyParams())
+    a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 30.0, 25.0, 1.5, ual_state=C.UAL_FLYING_AUTO,
+                  water_level=2.0, last_seen=0.0)
+    fire = FireView(7, 23.9, 17.9, 0.8, C.KIND_FACADE)
+    cmd = s.water._facade_step(a, 0, fire)
+    assert cmd.task == C.FOLLOW_PATH, cmd
+    end = cmd.goal["path"][-1]
+    assert end[:2] == pytest.approx((23.9, 19.5 + C.FACADE_STANDOFF)), end   # in front of facade A (A_4's)
+    for p in cmd.goal["path"]:
+        assert not any(b[0] < p[0] < b[2] and b[1] < p[1] < b[3] for b in c3.FOOTPRINTS), p

@@ -15,6 +15,7 @@ from circle_detector import hole_choice
 from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import LaserScan
 from mbzirc_arena.buildings import nearest_face, standing_at
+from mbzirc_arena.holders import known_holder, nearest_holder
 
 from .. import constants as C
 from ..control import (HoleCentering, body_to_world, front_distance, keep_off_return, nearest_return,
@@ -141,7 +142,6 @@ class SearchFacade(AgentTask):
             self.sleep(0.25)
 
 
-HOLDER_SNAP = 1.5   # m: a facade fire estimate this close to a known holder is that holder's fire
 HOLE_SEARCH_RADIUS = 2.0   # m: a hole the circle detector picks this close to the estimate or to its nearest
                            # known holder is the fire's (holders on a facade are >= 2.8 m apart)
 LOOK_TIME = 4.0            # s aiming on the estimate with no hole or fire in sight before looking wider
@@ -149,27 +149,6 @@ WIDE_VIEW_EXTRA = 1.5      # m further back than the shooting distance to look w
                            # +-27 deg vertical view covers ~+-0.7 m of facade at 1.5 m, ~+-1.5 m at 3 m
 CENTRED_WINDOW = 2.0       # s of aim errors averaged to judge "centred" while gusts move the UAV
 CENTRED_SPREAD_MAX = 0.4   # m: RMS wander about that average beyond which the jet is not on the hole
-
-
-def nearest_holder(fire) -> tuple:
-    """(the public facade holder nearest a point, its distance); (the point, inf) when there is none."""
-    fire = np.asarray(fire, dtype=float)
-    holders = np.asarray(C.FACADE_HOLDERS, dtype=float).reshape(-1, 3)
-    if len(holders) == 0:
-        return fire, math.inf
-    d = np.linalg.norm(holders - fire, axis=1)
-    i = int(np.argmin(d))
-    return holders[i], float(d[i])
-
-
-def known_holder(fire) -> np.ndarray:
-    """The public facade holder nearest a fire estimate when within HOLDER_SNAP, else the estimate.
-
-    Why: holder places are known before the trial, estimates carry the GNSS error of the poses that
-    placed them (about a metre); a standoff computed from an estimate near a corner put a UAV inside the
-    extension (seen under realistic uncertainty: two UAVs crashed into its wall beside holder A_4)."""
-    holder, d = nearest_holder(fire)
-    return holder if d <= HOLDER_SNAP else np.asarray(fire, dtype=float)
 
 
 def look_point(fire) -> np.ndarray:
