@@ -159,6 +159,8 @@ class AgentParams:
     soak_fraction: float = _param(0.25, 'share of the water that made an indoor fire read cold pumped on, aim '
                                   'frozen, before its cold check (a fire no longer seen may still burn)')
     soak_min_time: float = _param(1.0, 's at least of that soak')
+    dry_soak_min_share: float = _param(0.33, 'share of the soak\'s litres pumped before the tank ran dry for the '
+                                       'fire to be confirmed out with the pump off; less: left for a top-up')
     out_contrast: float = _param(2.0, 'deg C: an indoor fire is cold when its locked hot area reads no more than '
                                  'this above its wall in the raw thermal image (the noise level of a mean over '
                                  'its pixels, thermal_contrast.py)')

@@ -154,10 +154,12 @@ def indoor_fire(sim, holder_id):
 
 
 def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profile_name='realistic',
-         timeout=120.0, litres=None):
+         timeout=120.0, litres=None, track_from=None):
     """One ExtinguishIndoorFire goal on one tank against ual_sim's world under `profile_name`, seed `seed`:
     a water UAV placed start_distance m in front of indoor fire `holder` (at its height, facing it), its track
-    at the fire as its own GNSS frame puts it (truth + the UAV's bias then). need: litres the fire needs (None:
+    at the fire as its own GNSS frame puts it (truth + the UAV's bias then; track_from: another robot's id, the
+    track placed with that robot's bias instead, as when one robot found the fire and another waters it).
+    need: litres the fire needs (None:
     the seed's draw; a large value measures the whole tank). litres: the tank (None: full).
     Returns a dict: pumped, into (L into the fire), progress, status, extinguished, message, misses, ual."""
     from ual_sim.sim import Simulation
@@ -184,7 +186,8 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
     ual.fire_index = i
     agent = start_agent(UavAgent('2', be, {'region_timeout': 5.0, **(params or {})}), be)
     try:
-        track = c + sim.uncertainty.gnss_fix(rid) if sim.uncertainty is not None else c
+        finder = rid if track_from is None else track_from
+        track = c + sim.uncertainty.gnss_fix(finder) if sim.uncertainty is not None else c
         o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_ACTIVE, num_updates=50)
         o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = track
         o.pose.covariance = [0.0] * 36

@@ -112,6 +112,14 @@ class Soak:
     def soaking(self) -> bool:
         return self.end_litres is not None and not self.done
 
+    def share_done(self, pumped: float) -> float:
+        """Share (0-1) of the soak's litres pumped: pumped litres of this pour, the soak begun at
+        end_litres / (1 + fraction); 0 before it began."""
+        if self.end_litres is None:
+            return 0.0
+        begun = self.end_litres / (1.0 + self.fraction)
+        return max(0.0, min(1.0, (pumped - begun) / max(1e-9, self.end_litres - begun)))
+
     def update(self, hot: Optional[bool], watered: bool, pumped: float, now: float) -> Optional[bool]:
         """One CheckFire answer in, with the litres this pour pumped so far; the answer the cold check may
         count: cold answers become None (no evidence) until the soak is over."""

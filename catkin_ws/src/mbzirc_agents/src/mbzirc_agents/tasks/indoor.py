@@ -454,31 +454,35 @@ class ExtinguishIndoorFire(AgentTask):
         self._keep_off_walls(yaw)
 
     def _look_around(self, yaw: float) -> Optional[float]:
-        """The fire not in sight from the watering pose (heading yaw): look for a warm area in the raw thermal
-        image (thermal_contrast.warm_spot) straight ahead, then LOOK_TURN rad to either side and (UAV)
-        LOOK_CLIMB m above and below, each on a frame taken after the robot got there; at the first one seen,
-        turn (and climb) onto its centre and return that heading. None, back at yaw and the height it came
-        at, when none shows. Why (realistic seed 103): the watering pose faces the fire's track from where the
-        robot's GNSS fix says it is, and the two GNSS errors (0.5 m per axis, 0.4 m in height, each) differ
-        by more than the view's half-width plus the ring of flames at the watering distance (~0.85 m) in a
-        fair share of approaches: a UAV sent to top up a fire burning at 0 % read it cold from there, detector
-        and raw image, and pumped 1.27 L beside it. A warm area counts here only when it stands LOOK_MIN_RISE x
-        ~out_contrast over its wall: a fainter one beside the view is not told from a wall's warm feature
-        (realistic seed 105: a 5 degC area 43 deg off the heading took a top-up's whole tank, the fire at 98 %
-        untouched)."""
+        """The fire not in sight from the watering pose (heading yaw): look for it in the raw thermal image
+        (thermal_contrast.warm_spot) straight ahead, then LOOK_TURN rad to either side and (UAV) LOOK_CLIMB m
+        above and below, each on a frame taken after the robot got there. A look where the fire detector
+        reports a fire ends the search there; else, once every look was made, the warmest area seen is
+        taken; turn (and climb) onto its centre and return that heading. None, back at yaw and the height it
+        came at, when none shows. Why (realistic seed 103): the watering pose faces the fire's track from
+        where the robot's GNSS fix says it is, and the two GNSS errors (0.5 m per axis, 0.4 m in height,
+        each) differ by more than the view's half-width plus the ring of flames at the watering distance
+        (~0.85 m) in a fair share of approaches: a UAV sent to top up a fire burning at 0 % read it cold from
+        there, detector and raw image, and pumped 1.27 L beside it. A warm area counts here only when it
+        stands LOOK_MIN_RISE x ~out_contrast over its wall: a fainter one beside the view is not told from a
+        wall's warm feature (realistic seed 105: a 5 degC area 43 deg off the heading took a top-up's whole
+        tank, the fire at 98 % untouched). Why the warmest and not the first: a sun-heated outer wall seen
+        from inside stands 5-25 degC over the interior walls, and the first look that showed one took the
+        tank (closed loop, bench_indoor_pour.py --track-from 3, seed 12: three whole tanks 1.6 m beside
+        fires that a look 29 deg further showed burning; ual_sim's realistic profile)."""
         a = self.agent
         z0 = self._held_z(a.position())
         looks = [(0.0, 0.0), (LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)]
         if a.ROBOT_TYPE == 'uav':
             looks += [(0.0, LOOK_CLIMB), (0.0, -LOOK_CLIMB)]
+        best = None                                      # (contrast, spot) of the warmest area seen
         for turn, climb in looks:
             if turn or climb:
                 self.feedback('LOOKING', f'fire not in sight: looking {math.degrees(turn):+.0f} deg, {climb:+.1f} m')
                 self.aim_z = z0 + climb if a.ROBOT_TYPE == 'uav' else None
                 self._turn_to(yaw + turn)
             since = a.backend.now()
-            spot = None
-            end = since + AIM_SIGHTING_WAIT
+            spot, end = None, since + AIM_SIGHTING_WAIT
             while a.backend.now() < end:
                 spot = self.contrast.warm_spot(LOOK_MIN_RISE)
                 if spot is not None and spot[2] > since:
@@ -487,21 +491,31 @@ class ExtinguishIndoorFire(AgentTask):
                 self._wait_off_walls(0.1, yaw + turn)
             if spot is None:
                 continue
-            fov = a.p.forward_camera_fov
-            then = a.pose_at(spot[2])
-            new_yaw = float(then[3]) + pixel_bearing(spot[0], fov)
-            if a.ROBOT_TYPE == 'uav':
-                rise = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot[1], fov)) - a.p.jet_rise
-                reach = a.p.aim_height_range
-                self.aim_z = max(z0 - reach, min(z0 + reach, float(then[2]) + rise))
-            a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose: a warm area '
-                              f'{math.degrees(wrap_angle(new_yaw - yaw)):+.0f} deg off the heading, '
-                              f'{self._held_z(then) - z0:+.2f} m up: turning onto it')
-            return self._turn_to(new_yaw)
-        a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or below it')
-        self.aim_z = z0 if a.ROBOT_TYPE == 'uav' else None
-        self._turn_to(yaw)
-        return None
+            if self.sensed.latest_fire()[1] > since:     # the detector's fire: no wall passes its test
+                best = (math.inf, spot)
+                break
+            if best is None or spot[4] > best[0]:
+                best = (spot[4], spot)
+        if best is None:
+            a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or '
+                              'below it')
+            self.aim_z = z0 if a.ROBOT_TYPE == 'uav' else None
+            self._turn_to(yaw)
+            return None
+        spot = best[1]
+        fov = a.p.forward_camera_fov
+        then = a.pose_at(spot[2])
+        new_yaw = float(then[3]) + pixel_bearing(spot[0], fov)
+        if a.ROBOT_TYPE == 'uav':
+            rise = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot[1], fov)) - a.p.jet_rise
+            reach = a.p.aim_height_range
+            self.aim_z = max(z0 - reach, min(z0 + reach, float(then[2]) + rise))
+        why = ('the fire detector\'s fire' if math.isinf(best[0])
+               else f'the warmest area, {best[0]:.1f} degC over its wall,')
+        a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose: {why} '
+                          f'{math.degrees(wrap_angle(new_yaw - yaw)):+.0f} deg off the heading, '
+                          f'{self._held_z(then) - z0:+.2f} m up: turning onto it')
+        return self._turn_to(new_yaw)
 
     def _turn_in_place(self, yaw: float):
         """Hold where the robot is (at the held height), heading yaw; the pose it was at. No translation: a
@@ -600,7 +614,8 @@ class ExtinguishIndoorFire(AgentTask):
         if self.hold_xy is not None:
             pose[:2] = self.hold_xy                      # a UAV's is its set-point (its fix wobbles about it)
         soak = Soak(a.p.soak_fraction, a.p.soak_min_time)
-        frozen, first_level = False, None
+        frozen, first_level, pumped = False, None, 0.0
+        dry_early = None                                 # share of the soak done when the tank ran dry, if too little
         self.frozen_true_z = None
         self.raw_turn_time = -math.inf
         try:
@@ -612,11 +627,17 @@ class ExtinguishIndoorFire(AgentTask):
                 if pumping and a.water_empty():          # dry while soaking: confirm what it has
                     a.stop_pump()
                     pumping = False
+                    if first_level is not None and math.isfinite(a.water_level):
+                        pumped = first_level - a.water_level     # all of it: the tank is dry now
+                    share = soak.share_done(pumped)
+                    if share < a.p.dry_soak_min_share:
+                        dry_early = share
+                        break
                     soak.done = True
                     cold.restart()
-                    a.backend.loginfo(f'[{self.name}] fire {fire_id}: the tank ran dry while soaking it (it read cold '
-                                      f'with water flowing): out once it reads cold {cold.checks} times in a row '
-                                      'without water')
+                    a.backend.loginfo(f'[{self.name}] fire {fire_id}: the tank ran dry while soaking it '
+                                      f'({100 * share:.0f} % of the soak; it read cold with water flowing): out '
+                                      f'once it reads cold {cold.checks} times in a row without water')
                 self.check_preempt()
                 now = a.backend.now()
                 if now - start > a.p.extinguish_timeout:
@@ -685,6 +706,11 @@ class ExtinguishIndoorFire(AgentTask):
             return True, 'extinguished'
         if not cold.seen_hot:                           # the tank ran dry during a top-up
             raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: the tank ran dry topping it up, left active')
+        if dry_early is not None:
+            why = (f'the tank ran dry {100 * dry_early:.0f} % into the soak (under ~dry_soak_min_share '
+                   f'{100 * a.p.dry_soak_min_share:.0f} %): left for a top-up')
+            a.backend.loginfo(f'[{self.name}] fire {fire_id}: {why}')
+            return False, why
         out, why = dry_tank_verdict(cold)
         a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {why}')
         return out, 'extinguished' if out else why

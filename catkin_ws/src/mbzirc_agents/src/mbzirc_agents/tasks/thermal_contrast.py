@@ -272,13 +272,17 @@ class FireContrast:
             return True
 
     def warm_spot(self, min_rise: float = LOCK_MIN_RISE) -> Optional[tuple]:
-        """(column, row, frame time, whole) of the fire's centre in the latest recent frame (module
-        `warm_spot`, its warm core standing min_rise x ~out_contrast over its wall), None without one."""
+        """(column, row, frame time, whole, contrast) of the fire's centre in the latest recent frame (module
+        `warm_spot`, its warm core standing min_rise x ~out_contrast over its wall; contrast: deg C it stands
+        over it), None without one."""
         with self.lock:
             if self.frame is None or self.now() - self.frame_time > MAX_AGE:
                 return None
             spot = warm_spot(self.frame, min_rise * self.out_contrast)
-            return None if spot is None else (spot[0], spot[1], self.frame_time, spot[2])
+            if spot is None:
+                return None
+            masks = lock_masks(self.frame, min_rise * self.out_contrast)
+            return spot[0], spot[1], self.frame_time, spot[2], contrast(self.frame, masks)
 
     @property
     def locked(self) -> bool:
