@@ -71,3 +71,12 @@ def test_realistic_111_a_standoff_for_an_estimate_near_the_extension_corner_stan
     pos, yaw = g.facade_standoff((23.7, 17.7, 0.8), C.BUILDINGS, 2.0)
     assert pos == pytest.approx((23.7, 21.5, 0.8)) and yaw == pytest.approx(-math.pi / 2)
     assert not in_footprint(pos, C.BUILDINGS)
+
+
+def test_realistic_115_the_shooting_pose_of_an_estimate_inside_the_wall_keeps_its_distance_from_the_wall():
+    """Realistic seed 115: fire D_0's track at (22.97, 18.89, 5.1), 0.6 m inside facade A by the GNSS errors
+    that placed it (1.9 m from D_0, beyond the holder snap): the shooting pose, 1.5 m out from the estimate, was
+    0.9 m from the wall, and UAV 2 hit facade A while looking for the hole (its own GNSS error ~0.6 m). Out from
+    the facade's plane it is 1.5 m from the wall whatever the estimate's error along the normal."""
+    pos, _ = g.facade_standoff((22.97, 18.89, 5.1), C.BUILDINGS, 1.5)
+    assert pos[1] == pytest.approx(19.5 + 1.5)
