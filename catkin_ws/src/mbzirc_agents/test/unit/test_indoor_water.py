@@ -267,30 +267,30 @@ def test_a_fire_hot_while_any_water_flowed_is_left_for_a_top_up_when_the_tank_ru
 
 def test_a_fire_that_read_cold_with_water_flowing_and_whose_tank_ran_dry_while_soaking_is_confirmed_without_water(
         scenes):
-    """Cold with water flowing 0.3 L before the tank ran dry (of 2 L): the soak (a quarter of the ~1.5 L that
-    made it read cold) began and the tank ran dry half way through it. The robot confirms with the pump off, as
+    """Cold with water flowing 1.5 L before the tank ran dry (of 10 L): the soak (a quarter of the ~8.3 L that
+    made it read cold) began and the tank ran dry in it, past ~dry_soak_min_share of it. The robot confirms with the pump off, as
     after a whole soak: 6 cold answers in a row in the raw thermal image (at its wall's level) and it is out;
     no top-up trip for a fire already put out. (Before: 'the tank ran dry before 6 cold answers (0 so far)' on
     fires put out by their first tank, ual_sim's realistic profile: 35 of 72 closed-loop pours,
     test_indoor_closed_loop.py.)"""
     sc = scenes(hot_until=0.0)
-    sc.ual.water = 2.0
-    sc.hot = lambda: sc.ual.water > 0.3
-    s = sc.extinguish()
+    sc.ual.water = 10.0                  # cold with 1.5 L left: a soak of ~2.1 L cut at ~70 % (margins for timing)
+    sc.hot = lambda: sc.ual.water > 1.5
+    s = sc.extinguish(timeout=90)
     assert s.status == 'succeeded' and s.result.extinguished is True, s.result.message
     assert sc.statuses == [C.STATUS_EXTINGUISHED] and sc.ual.water <= 0.1
     assert any('ran dry while soaking' in m for m in sc.be.infos), sc.be.infos
 
 
 def test_a_soak_the_tank_cut_short_at_its_start_leaves_the_fire_for_a_top_up(scenes):
-    """Cold with water flowing only as the last drops left the tank: the soak, the margin past the point where
+    """Cold with water flowing only as the last 0.4 L left the tank: the soak, the margin past the point where
     a fire stops showing, had under ~dry_soak_min_share of its litres. Not confirmed out, left for a top-up
     (closed loop, ual_sim's realistic profile: tanks dry 0-22 % into the soak left fires at 99.5-99.99 %
     confirmed out; bench_indoor_pour.py)."""
     sc = scenes(hot_until=0.0)
-    sc.ual.water = 1.2
-    sc.hot = lambda: sc.ual.water > 0.07
-    s = sc.extinguish()
+    sc.ual.water = 10.0                  # cold with 0.4 L left: a soak of ~2.3 L (a quarter of ~9.4 L) cut at ~17 %
+    sc.hot = lambda: sc.ual.water > 0.4
+    s = sc.extinguish(timeout=90)
     assert s.status == 'succeeded' and s.result.extinguished is False, s.result.message
     assert sc.statuses == [] and 'into the soak' in s.result.message and 'top-up' in s.result.message
 
@@ -299,16 +299,16 @@ def test_a_fire_that_shows_hot_again_after_a_soak_cut_short_by_a_dry_tank_is_lef
     """Cold with water flowing, the tank dry in the soak, then hot again with the pump off: it still burns,
     and there is no water to give it: not out, left for a top-up."""
     sc = scenes(hot_until=0.0)
-    sc.ual.water = 2.0
+    sc.ual.water = 10.0
     cold_from = []
 
     def hot():
-        if sc.ual.water > 0.3:
+        if sc.ual.water > 1.5:
             return True
         cold_from.append(sc.be.clock.now())
-        return sc.be.clock.now() - cold_from[0] > 1.5        # cold for 1.5 s, then hot again
+        return sc.be.clock.now() - cold_from[0] > 5.0        # cold for 5 s (the tank dry by then), then hot
     sc.hot = hot
-    s = sc.extinguish()
+    s = sc.extinguish(timeout=90)
     assert s.status == 'succeeded' and s.result.extinguished is False, s.result.message
     assert sc.statuses == [] and 'top-up' in s.result.message
 
