@@ -156,3 +156,33 @@ def test_a_uav_with_a_large_gnss_error_lands_on_its_pad_by_its_laser_the_first_t
             assert any('GNSS error by the laser' in m for m in be.infos), be.infos
         finally:
             scene.stop = True
+
+
+def test_realistic_106_a_correction_low_over_the_pad_that_does_not_arrive_ends_in_a_landing_not_a_hover():
+    """Realistic seed 106: the laser's second fix, 1 m over the pad, asked for a 0.7 m move that never arrived;
+    the task failed with the UAV hovering there, and its hover box and a neighbour's way home locked each other
+    for the rest of the trial (both water UAVs idle from 280 s). Here no go-to below 2 m moves the UAV
+    sideways: it lands where it is and the refill goes on (a landing off the pad is tried again)."""
+    from laser_world import LaserScene
+    with refill_scene() as (be, agent, ual, reset):
+        scene = LaserScene(be, ual)
+        go_to = be.handlers['ual/go_to_waypoint']
+
+        def stuck_low(req):                          # below 2 m the UAV keeps its x, y (as seed 106's did)
+            p = req.waypoint.pose.position
+            if p.z < 2.0:
+                p.x, p.y = float(ual.pos[0]), float(ual.pos[1])
+            return go_to(req)
+        be.handlers['ual/go_to_waypoint'] = stuck_low
+        task = agent.specs['go_home_and_refill'].task
+        fixes = iter([(0.0, 0.0), (0.7, 0.0)])           # high over the pad, then low: the error moved 0.7 m
+        task._gnss_error = lambda what: next(fixes, None)
+        try:
+            fly_out(be, ual)
+            s = be.servers['go_home_and_refill_action']
+            s.send(GoHomeAndRefillGoal())
+            assert s.wait(400) == 'succeeded', s.result.message
+            assert reset.landings, 'it never landed'
+            assert any('landing where it is' in m for m in be.warns), be.warns
+        finally:
+            scene.stop = True
