@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
+from mbzirc_arena.c3 import ARENA
+
 from . import constants as C
 from . import geometry as G
 from .bookkeeping import Bookkeeping
@@ -13,6 +15,7 @@ from .command import Command, StrategyParams
 from .world_model import AgentView, FireView
 
 MIN_TRANSIT_Z = 1.5  # m: a transit starting lower climbs straight up to this first
+OVER_HOME = 3.0      # m (horizontal) from its own pad within which a flying UAV is sent home directly
 ELEVATOR_BUSY_COST = 40.0  # m added to a route through an elevator another UAV is transiting
 
 
@@ -24,6 +27,16 @@ def near_building(a: AgentView, distance: float = C.ELEVATOR_MARGIN - 1.0) -> bo
 def inside_tower(a: AgentView) -> bool:
     r = G.obstacle_rect(a.z, 0.0, boxes=(C.TOWER_BOX,))
     return r is not None and G.inside(a.position, r)
+
+
+def over_home(a: AgentView) -> bool:
+    """Whether a flying UAV is within OVER_HOME (horizontal) of its own pad in the arena model, away from the
+    building: its go_home_and_refill takes it from there (climb on the spot, over the pad, land), no transit
+    to its altitude's elevator first. Why (realistic seed 106): a UAV left hovering 1 m over its pad by a
+    failed landing was sent 'leaving the building' to climb at an elevator 12 m up; that go-to and a
+    neighbour's way home waited for each other's regions for the rest of the trial."""
+    homes = [h.position for h in ARENA.homes if str(h.robot_id) == str(a.agent_id)]
+    return bool(homes) and not near_building(a) and math.dist(a.position[:2], homes[0][:2]) <= OVER_HOME
 
 
 def at(a: AgentView, target: Sequence[float], tol: float = 1.0) -> bool:
@@ -112,7 +125,7 @@ class Router:
     def go_home(self, a: AgentView, reason: str) -> Command:
         """Leave the building (through the window, then the nearest free elevator down or up to the UAV's
         own altitude), then go home (and refill)."""
-        if a.landed:
+        if a.landed or over_home(a):
             return Command(a.agent_id, C.GO_HOME_AND_REFILL, {}, reason)
         alt = self.altitude(a.agent_id)
         bottoms = [(x, y, alt, 0.0) for x, y in G.elevator_points()]

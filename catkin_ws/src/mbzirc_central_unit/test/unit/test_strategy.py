@@ -634,3 +634,16 @@ def test_realistic_111_a_facade_fire_estimated_nearer_the_face_the_extension_hid
     assert end[:2] == pytest.approx((23.9, 19.5 + C.FACADE_STANDOFF)), end   # in front of facade A (A_4's)
     for p in cmd.goal["path"]:
         assert not any(b[0] < p[0] < b[2] and b[1] < p[1] < b[3] for b in c3.FOOTPRINTS), p
+
+
+def test_realistic_106_a_uav_left_hovering_low_over_its_pad_is_sent_home_directly():
+    """Realistic seed 106: UAV 3's landing failed 1 m over its pad (0, 3.3); sent 'leaving the building' to
+    climb to 12 m at an elevator, its go-to and UAV 2's way home waited for each other's regions for the rest
+    of the trial. Over its own pad a UAV gets go_home_and_refill at once; farther off, the transit as before."""
+    s = Strategy(StrategyParams())
+
+    def uav3(x, y, z):
+        return AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, x, y, z, ual_state=C.UAL_FLYING_AUTO,
+                         water_level=0.0, last_seen=0.0)
+    assert s.router.go_home(uav3(0.6, 3.8, 1.0), "refill").task == C.GO_HOME_AND_REFILL
+    assert s.router.go_home(uav3(-6.0, 10.0, 1.0), "refill").task == C.FOLLOW_PATH
