@@ -647,3 +647,28 @@ def test_realistic_106_a_uav_left_hovering_low_over_its_pad_is_sent_home_directl
                          water_level=0.0, last_seen=0.0)
     assert s.router.go_home(uav3(0.6, 3.8, 1.0), "refill").task == C.GO_HOME_AND_REFILL
     assert s.router.go_home(uav3(-6.0, 10.0, 1.0), "refill").task == C.FOLLOW_PATH
+
+
+def test_realistic_101_a_uav_just_in_through_the_window_that_reaches_a_fire_waters_it_from_there():
+    """Realistic seed 101 (final-commit benchmark): in2_e (17.9, 16.5, 11.5, on the east face of an interior
+    wall) estimated at (16.5, 16.75), 1.4 m through that wall; found from room 1 (east), whose window is the
+    way to it, but no viewpoint of it is in clear line from inside room 1. Before: UAV 3 was sent in through
+    room 1's window, then at once out through it to reach room 1, and in again, for 600 s; the fire was left at
+    58 %. Now, just in through that window, it is watered from there."""
+    s = Strategy(StrategyParams())
+    found = Command("2", C.SEARCH_INDOOR, {"floor": 2, "path": []}, "searching floor 2 indoors (room 1)", (2, 1))
+    s.on_sent(found)
+    s.on_result(found, True, {"fire_ids": [19]}, now=0.0)
+    s.book.pending_ids.clear()
+    fire = FireView(19, 16.5, 16.75, 11.98, C.KIND_INDOOR)
+
+    def uav3(t, x, y):
+        a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, x, y, 12.5, ual_state=C.UAL_FLYING_AUTO,
+                      water_level=2.0, last_seen=t)
+        return s.decide(WorldView(t, {"3": a}, {19: fire}))
+    [enter] = uav3(0.0, 20.0, 21.5)                                  # in front of room 1's window
+    assert (enter.task, enter.target) == (C.ENTER_BUILDING, (2, 1)), enter
+    s.on_sent(enter)
+    s.on_result(enter, True, {}, now=1.0)
+    [cmd] = uav3(2.0, 20.0, 18.8)                                    # inside room 1
+    assert cmd.task == C.EXTINGUISH_INDOOR_FIRE and cmd.goal["fire_id"] == 19, cmd
