@@ -80,6 +80,21 @@ _ROWS, _COLS = np.mgrid[0:FRAME_SIZE, 0:FRAME_SIZE].astype(np.float64)
 _PLANE = np.stack([np.ones(FRAME_SIZE * FRAME_SIZE), _ROWS.ravel(), _COLS.ravel()], axis=1)
 
 
+def wall_plane(flat: np.ndarray, idx: np.ndarray, rounds: int, warm_only: bool) -> np.ndarray:
+    """Coefficients (_PLANE's columns) of the plane fitted to the pixels idx of a flattened frame, refitted up
+    to `rounds` times without the pixels farther than 3 robust deviations from it (warm_only: only those
+    above it, the warm areas standing out of a wall), while MIN_SURROUND pixels remain."""
+    for _ in range(rounds):
+        coef = np.linalg.lstsq(_PLANE[idx], flat[idx], rcond=None)[0]
+        resid = flat[idx] - _PLANE[idx] @ coef
+        spread = 1.4826 * float(np.median(np.abs(resid))) + 1e-6
+        keep = (resid if warm_only else np.abs(resid)) <= 3.0 * spread
+        if keep.all() or keep.sum() < MIN_SURROUND:
+            break
+        idx = idx[keep]
+    return coef
+
+
 def contrast(frame: np.ndarray, masks: tuple) -> float:
     """deg C the locked core reads above its surroundings in frame (NaN when either part has too few valid
     pixels): the core's mean less the wall's level under it, a plane fitted to the surroundings (a sun-heated
@@ -92,14 +107,7 @@ def contrast(frame: np.ndarray, masks: tuple) -> float:
     idx = np.flatnonzero(surround.ravel() & np.isfinite(flat))
     if not hot.size or idx.size < MIN_SURROUND:
         return math.nan
-    for _ in range(2):
-        coef = np.linalg.lstsq(_PLANE[idx], flat[idx], rcond=None)[0]
-        resid = flat[idx] - _PLANE[idx] @ coef
-        spread = 1.4826 * float(np.median(np.abs(resid))) + 1e-6
-        keep = np.abs(resid) <= 3.0 * spread
-        if keep.all() or keep.sum() < MIN_SURROUND:
-            break
-        idx = idx[keep]
+    coef = wall_plane(flat, idx, rounds=2, warm_only=False)
     wall = _PLANE[core.ravel()] @ coef
     return float(hot.mean() - wall[np.isfinite(flat[core.ravel()])].mean())
 
@@ -140,9 +148,11 @@ def warm_spot(frame: np.ndarray, min_rise: float) -> Optional[tuple]:
     where the GNSS fix's wander takes it, 0.0 deg, and at 1.0 m 3 deg the wrong way), while the hole it rings
     is whole in the frame and its centre is the fire's (there: within 0.3 deg)."""
     masks = lock_masks(frame, min_rise)
-    if masks is None:
-        return None
-    core = masks[0]
+    return None if masks is None else spot_of(masks[0])
+
+
+def spot_of(core: np.ndarray) -> tuple:
+    """(column, row, whole) of the fire's centre for its warm core (`warm_spot`'s rule)."""
     hole = enclosed(core)
     clipped = core[0, :].any() or core[-1, :].any() or core[:, 0].any() or core[:, -1].any()
     ringed = hole.sum() >= MIN_CORE
@@ -178,14 +188,7 @@ def warm_area_contrast(frame: np.ndarray, min_rise: float) -> float:
     idx = np.flatnonzero(np.isfinite(flat))
     if idx.size < MIN_SURROUND:
         return 0.0
-    for _ in range(3):                     # the wall's plane, the warm pixels dropped from the fit
-        coef = np.linalg.lstsq(_PLANE[idx], flat[idx], rcond=None)[0]
-        resid = flat[idx] - _PLANE[idx] @ coef
-        spread = 1.4826 * float(np.median(np.abs(resid))) + 1e-6
-        keep = resid <= 3.0 * spread
-        if keep.all() or keep.sum() < MIN_SURROUND:
-            break
-        idx = idx[keep]
+    coef = wall_plane(flat, idx, rounds=3, warm_only=True)   # the wall's plane, the warm pixels dropped
     level = (flat - _PLANE @ coef).reshape(frame.shape)      # deg C over the wall's plane
     masks = lock_masks(level, min_rise)
     return 0.0 if masks is None else contrast(level, masks)
@@ -278,10 +281,10 @@ class FireContrast:
         with self.lock:
             if self.frame is None or self.now() - self.frame_time > MAX_AGE:
                 return None
-            spot = warm_spot(self.frame, min_rise * self.out_contrast)
-            if spot is None:
-                return None
             masks = lock_masks(self.frame, min_rise * self.out_contrast)
+            if masks is None:
+                return None
+            spot = spot_of(masks[0])
             return spot[0], spot[1], self.frame_time, spot[2], contrast(self.frame, masks)
 
     @property
