@@ -23,6 +23,11 @@ class TaskError(Exception):
     """Raised inside a task's run() to end it with outcome error and this message."""
 
 
+class MoveTimedOut(TaskError):
+    """A go-to (RobotAgent.move_to) not there in its time: a caller for whom the move is best effort catches
+    this one and lets every other TaskError (crashed, no trusted pose) end the task."""
+
+
 class AgentTask(smach.State):
     """Base of every task: a smach State whose outcomes are success / error / preempted.
 

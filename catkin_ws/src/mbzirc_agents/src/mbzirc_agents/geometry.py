@@ -10,20 +10,7 @@ import math
 from typing import Optional, Sequence
 
 import numpy as np
-from mbzirc_arena.buildings import open_face, standing_at
-
-
-# ---- facades -----------------------------------------------------------------------------------------
-def facade_standoff(fire: Sequence[float], buildings: Sequence[Sequence[float]], distance: float) -> tuple:
-    """((x, y, z), yaw) of a robot `distance` m out from the facade of `fire` (the nearest wall rising to its
-    height whose standoff is in the open: buildings.open_face), facing the wall; out from the wall's known
-    plane, not from `fire`, whose estimate may lie in the wall or in front of it by its GNSS error."""
-    normal, foot = open_face(fire, standing_at(fire, buildings), distance)
-    if normal is None:
-        raise ValueError('no building')
-    pos = (foot[0] + normal[0] * distance, foot[1] + normal[1] * distance, fire[2])
-    yaw = math.atan2(-normal[1], -normal[0])
-    return pos, yaw
+from mbzirc_arena.buildings import facade_standoff  # noqa: F401  (the facade rule is the arena's)
 
 
 def facing_pose(target: Sequence[float], frm: Sequence[float], distance: float) -> tuple:

@@ -31,7 +31,7 @@ from uav_abstraction_layer.srv import GoToWaypoint, GoToWaypointRequest
 from . import constants as C
 from . import heartbeat as hb
 from .agent import Agent
-from .agent_task import AgentTask, TaskError, TaskPreempted
+from .agent_task import AgentTask, MoveTimedOut, TaskError, TaskPreempted
 from .params import AgentParams
 from .pose_source import NONE, PoseSource
 from .pose_error_boxes import grown, pose_error_pad
@@ -525,17 +525,22 @@ class RobotAgent(Agent):
             self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
 
     def move_to(self, task: AgentTask, target: Sequence[float], yaw: Optional[float], what: str,
-                tolerance: Optional[float] = None, stop_when: Optional[Any] = None) -> bool:
-        """Send a waypoint and watch the pose at the control rate until there (or TaskError on timeout).
+                tolerance: Optional[float] = None, stop_when: Optional[Any] = None,
+                horizontal: bool = False, timeout: Optional[float] = None) -> bool:
+        """Send a waypoint and watch the pose at the control rate until there (MoveTimedOut when not there
+        in `timeout` s: by default the time at half ~max_speed plus 20 s).
 
         On preemption the robot is stopped where it is (hold) before TaskPreempted propagates. When
         stop_when() turns true on the way, the robot holds there and False is returned (True: arrived).
+        `horizontal`: arrived once within the tolerance in x, y (a correction whose height is another
+        loop's business, e.g. the clearance guard low over a pad).
         """
         cur = self.position()
         yaw = cur[3] if yaw is None else yaw
         tol = self.p.position_tolerance if tolerance is None else tolerance
         dist = float(np.linalg.norm(np.asarray(target[:3]) - cur[:3]))
-        timeout = dist / max(0.2, 0.5 * self.p.max_speed) + 20.0
+        if timeout is None:
+            timeout = dist / max(0.2, 0.5 * self.p.max_speed) + 20.0
         self.send_waypoint(target[0], target[1], target[2], yaw)
         held = self.pose_in_doubt()            # the waypoint became a hold: sent again once the doubt ends
         end = self.backend.now() + timeout
@@ -552,14 +557,14 @@ class RobotAgent(Agent):
                     self.send_waypoint(target[0], target[1], target[2], yaw)
                 p = self.position()
                 dxy = math.hypot(target[0] - p[0], target[1] - p[1])
-                dz = abs(self.set_point_z(target) - p[2]) if self.ROBOT_TYPE == 'uav' else 0.0
+                dz = abs(self.set_point_z(target) - p[2]) if self.ROBOT_TYPE == 'uav' and not horizontal else 0.0
                 if dxy <= tol and dz <= tol and abs(wrap_angle(yaw - p[3])) <= self.p.yaw_tolerance:
                     return True
                 if stop_when is not None and stop_when():
                     self.hold()
                     return False
                 if self.backend.now() > end:
-                    raise TaskError(f'{what}: not there after {timeout:.0f} s ({dxy:.1f} m left)')
+                    raise MoveTimedOut(f'{what}: not there after {timeout:.0f} s ({dxy:.1f} m left)')
                 self.raise_if_crashed(what)
                 self.raise_if_lost(what)
                 task.feedback('MOVING', f'{what}: {math.hypot(dxy, dz):.1f} m to go')

@@ -51,7 +51,7 @@ class UgvAgent(RobotAgent):
         return self.ual_state == C.UAL_FLYING_AUTO
 
     def move_to(self, task: AgentTask, target: Sequence[float], yaw: Optional[float], what: str,
-                tolerance: Optional[float] = None, stop_when: Optional[Any] = None) -> bool:
+                tolerance: Optional[float] = None, stop_when: Optional[Any] = None, **kwargs: Any) -> bool:
         """RobotAgent.move_to, but a waypoint within the tolerance of where the UGV is (a turn where it stands:
         a look around, facing a door) is turned on the spot on yaw-rate commands (turn_on_the_spot).
         Why (realistic seed 108): a go-to is under way in the GNSS frame while the UGV turns, and the UAL
@@ -62,7 +62,7 @@ class UgvAgent(RobotAgent):
         if stop_when is None and yaw is not None and math.hypot(target[0] - here[0], target[1] - here[1]) <= tol:
             self.turn_on_the_spot(task, yaw, what)
             return True
-        return super().move_to(task, target, yaw, what, tolerance=tolerance, stop_when=stop_when)
+        return super().move_to(task, target, yaw, what, tolerance=tolerance, stop_when=stop_when, **kwargs)
 
     def turn_on_the_spot(self, task: AgentTask, yaw: float, what: str) -> None:
         """Turn to yaw on yaw-rate commands (no translation whatever the GNSS error does), within

@@ -13,7 +13,7 @@ from typing import Optional, Sequence
 
 from mbzirc_arena import c3
 from mbzirc_arena import routing as R
-from mbzirc_arena.buildings import in_footprint, standing_at
+from mbzirc_arena.buildings import facade_standoff, open_face, standing_at
 from mbzirc_arena.c3 import floor_of  # noqa: F401  (the strategy's floor rule is the arena's)
 
 from . import constants as C
@@ -125,49 +125,30 @@ def plan_route(start: Point, goal: Point, elevator: int, same_level_tol: float =
     return path
 
 
-def _face_gaps(point: Point) -> dict:
-    """m from point to each tower facade's plane: A (north wall), C (west wall), D (east wall)."""
-    t = c3.TOWER_BOX
-    return {"A": abs(point[1] - t[4]), "C": abs(point[0] - t[0]), "D": abs(point[0] - t[3])}
-
-
-def _in_front(face: str, point: Point, standoff: float, z: float) -> Pose:
-    """Pose `standoff` m out from facade `face`'s plane (the tower's, known), level with point along it."""
-    t = c3.TOWER_BOX
-    if face == "A":
-        return (point[0], t[4] + standoff, z, -math.pi / 2)
-    if face == "C":
-        return (t[0] - standoff, point[1], z, 0.0)
-    return (t[3] + standoff, point[1], z, math.pi)
-
-
-def _open_at(pose: Pose) -> bool:
-    """Whether pose lies outside the footprint of every building rising to its height."""
-    return not in_footprint(pose[:2], standing_at(pose[:3], c3.FOOTPRINTS, clearance=0.0))
+# Facade letters by the outward normal of the tower's faces: A north, B south, C west, D east.
+FACADE_LETTERS = {(0.0, 1.0): "A", (0.0, -1.0): "B", (-1.0, 0.0): "C", (1.0, 0.0): "D"}
 
 
 def facade_of(holder: Point, standoff: float = C.FACADE_STANDOFF) -> str:
-    """Facade letter of a holder or a facade fire estimate: the nearest of A (north wall), C (west wall) and
-    D (east wall of the tower) whose viewpoint is open at the point's height. Why the nearest, not within
-    0.3 m of a face: an estimate carries the GNSS error of the poses that placed it; one 0.3 m north of
-    facade A counted as facade D, whose viewpoint put the transit 0.3 m from facade A (two UAVs hit it under
-    realistic uncertainty, seed 102). Why open: the extension hides facade D below 4.5 m; an estimate of A_4
-    (facade A, 0.5 m from that corner) placed 1.8 m into the tower was nearer D, its viewpoint inside the
-    extension, every transit to it refused and the fire never watered (realistic seed 111)."""
-    z = max(holder[2], 1.0)
-    gaps = _face_gaps(holder)
-    for face in sorted(gaps, key=gaps.get):
-        if _open_at(_in_front(face, holder, standoff, z)):
-            return face
-    return min(gaps, key=gaps.get)
+    """Facade letter of a holder or a facade fire estimate: the facade whose standoff the viewpoint is in
+    (mbzirc_arena.buildings.open_face: the nearest wall whose standoff is in the open). Why the nearest, not
+    within 0.3 m of a face: an estimate carries the GNSS error of the poses that placed it (realistic seed
+    102: one 0.3 m north of facade A counted as facade D, two UAVs hit facade A). Why open: the extension
+    hides facade D below 4.5 m (realistic seed 111: an estimate of A_4 1.8 m into the tower, nearer D, got a
+    viewpoint inside the extension and was never watered)."""
+    normal, _ = open_face(_at_least(holder, 1.0), standing_at(_at_least(holder, 1.0), c3.FOOTPRINTS), standoff)
+    return FACADE_LETTERS[tuple(float(n) for n in normal)]
 
 
 def viewpoint(holder: Point, standoff: float = C.FACADE_STANDOFF, min_z: float = 1.0) -> Pose:
-    """Pose `standoff` metres in front of a facade point, looking at it: out from the facade's known plane
-    (an estimate inside the wall or out in front by its GNSS error still gets the standoff from the wall:
-    one 1.8 m inside put the viewpoint 0.2 m from the wall), level with the point along it."""
-    z = max(holder[2], min_z)
-    return _in_front(facade_of(holder, standoff), holder, standoff, z)
+    """Pose `standoff` metres in front of a facade point, looking at it, at least min_z high: the agents'
+    standoff rule (mbzirc_arena.buildings.facade_standoff), out from the facade's known plane."""
+    (x, y, z), yaw = facade_standoff(_at_least(holder, min_z), c3.FOOTPRINTS, standoff)
+    return (x, y, z, yaw)
+
+
+def _at_least(p: Point, z_min: float) -> Point:
+    return (p[0], p[1], max(p[2], z_min))
 
 
 def _perimeter_key(holder: Point) -> float:

@@ -16,7 +16,7 @@ from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
-from ..agent_task import AgentTask, TaskError, TaskPreempted
+from ..agent_task import AgentTask, MoveTimedOut, TaskError
 from ..leg_guard import LegGuard
 from ..pad_fix import face_errors, gnss_error
 from ..wall_clearance import off_the_walls
@@ -113,18 +113,24 @@ class Land(AgentTask):
             self.result['message'] = 'already landed'
             return C.SUCCESS
         p = a.position()
-        land_in_column(self, p[0], p[1])
+        reserve_landing_column(self, p[0], p[1])
+        land_here(self)
         self.result['message'] = 'landed'
         return C.SUCCESS
 
 
-def land_in_column(task: AgentTask, x: float, y: float) -> None:
-    """Reserve the landing column over (x, y), land where the UAV is, free every region."""
+def reserve_landing_column(task: AgentTask, x: float, y: float) -> None:
+    """Reserve the column over (x, y) from the ground to just above the UAV (region 'land')."""
     a = task.agent
-    p = a.position()
     half = a.p.hold_half_size
     task.feedback('WAITING_REGION', 'reserving the landing column')
-    a.reserve(task, 'land', column_box(x, y, a.arena[2], p[2] + half, half))
+    a.reserve(task, 'land', column_box(x, y, a.arena[2], a.position()[2] + half, half))
+
+
+def land_here(task: AgentTask) -> None:
+    """Land where the UAV is (its landing column reserved: reserve_landing_column), free every region."""
+    a = task.agent
+    p = a.position()
     task.feedback('LANDING', f'landing from z {p[2]:.1f}')
     try:
         srv = a.iface.add_client('ual/land', LandSrv)
@@ -438,10 +444,7 @@ class GoHomeAndRefill(AgentTask):
                                                                None)}, 'over the pad by the laser')
             except TaskError as e:
                 a.backend.logwarn(f'[{self.name}] {e}: going down where it is')
-        half = a.p.hold_half_size
-        pad = (float(home[0]), float(home[1]))          # the column stands on the pad (public), not on GNSS
-        self.feedback('WAITING_REGION', 'reserving the landing column')
-        a.reserve(self, 'land', column_box(pad[0], pad[1], a.arena[2], a.position()[2] + half, half))
+        reserve_landing_column(self, float(home[0]), float(home[1]))   # on the pad (public), not on GNSS
         here = a.position()
         low = a.at_true_height((here[0], here[1], a.arena[2] + a.p.pad_approach_height))
         if here[2] > low[2] + a.p.position_tolerance:
@@ -453,36 +456,22 @@ class GoHomeAndRefill(AgentTask):
             here = a.position()
             target = (spot[0] + err[0], spot[1] + err[1], here[2])
             if math.hypot(target[0] - here[0], target[1] - here[1]) > 0.1:
-                self._best_effort_move(target, 'over the pad by the laser, low')
-        land_in_column(self, *pad)
+                self._correct_low_over_pad(target)
+        land_here(self)
 
-    def _best_effort_move(self, target, what: str) -> None:
-        """A horizontal correction over the pad: done once within ~position_tolerance in x, y (its height is
-        the clearance guard's business down there); not reached in PAD_MOVE_TIME s, the UAV lands where it is
-        (a landing off the pad is tried again: ~reland_after), never abandoned hovering low over the pads.
+    def _correct_low_over_pad(self, target) -> None:
+        """The horizontal correction low over the pad (its height is the clearance guard's business down
+        there), best effort: not there in PAD_MOVE_TIME s, the UAV lands where it is (a landing off the pad
+        is tried again: ~reland_after), never abandoned hovering low over the pads.
         Why (realistic seed 106): a correction 0.7 m away at 1 m over the pad never arrived, the task failed
         with the UAV hovering there, its hover box and a neighbour's way home locked each other for the rest
         of the trial and both water UAVs were idle from 280 s."""
         a = self.agent
-        end = a.backend.now() + PAD_MOVE_TIME
-        a.send_waypoint(target[0], target[1], target[2], a.position()[3])
-        while True:
-            try:
-                self.check_preempt()
-            except TaskPreempted:
-                a.hold()
-                raise
-            p = a.position()
-            left = math.hypot(target[0] - p[0], target[1] - p[1])
-            if left <= a.p.position_tolerance:
-                return
-            if a.backend.now() > end:
-                a.backend.logwarn(f'[{self.name}] {what}: {left:.1f} m left after {PAD_MOVE_TIME:.0f} s: '
-                                  'landing where it is')
-                a.hold()
-                return
-            self.feedback('MOVING', f'{what}: {left:.1f} m to go')
-            self.sleep(0.1)
+        try:
+            a.move_to(self, target, None, 'over the pad by the laser, low', horizontal=True, timeout=PAD_MOVE_TIME)
+        except MoveTimedOut as e:
+            a.backend.logwarn(f'[{self.name}] {e}: landing where it is')
+            a.hold()
 
     def _gnss_error(self, what: str):
         """(ex, ey) of the reported pose by the laser on the buildings' outline (pad_fix), over ~PAD_FIX_TIME s
