@@ -18,14 +18,12 @@ from mbzirc_arena.routing import plan_2d
 from .. import constants as C
 from ..agent_task import AgentTask, MoveTimedOut, TaskError
 from ..leg_guard import LegGuard
-from ..pad_fix import face_errors, gnss_error
 from ..wall_clearance import off_the_walls
 from .common import parse_path, parse_pose
+from .outline_fix import laser_gnss_error
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
-PAD_FIX_TIME = 0.6     # s of scans (10 Hz) whose observations make one laser fix over the pad
 PAD_MOVE_TIME = 8.0    # s at most for the correction low over the pad (<= 2 m at the UAL's slow speed near ground)
-LASER_HEIGHT = 0.1     # m of the laser over the reported z (base_link -> laser_link)
 FLYING = C.UAL_FLYING
 
 
@@ -474,26 +472,8 @@ class GoHomeAndRefill(AgentTask):
             a.hold()
 
     def _gnss_error(self, what: str):
-        """(ex, ey) of the reported pose by the laser on the buildings' outline (pad_fix), over ~PAD_FIX_TIME s
-        of scans; an unobserved direction 0; None without any observation (logged)."""
-        a = self.agent
-        obs, end = [], a.backend.now() + PAD_FIX_TIME
-        while True:
-            points = self.guard.points()
-            if points is not None:
-                here = a.position()
-                obs += face_errors(points, here[:2], here[2] + LASER_HEIGHT)
-            if a.backend.now() >= end:
-                break
-            self.sleep(0.1)
-        err, seen = gnss_error(obs)
-        if not seen:
-            a.backend.logwarn(f'[{self.name}] {what}: no outer wall of the buildings in the laser\'s view: the '
-                              'landing is flown on GNSS')
-            return None
-        a.backend.loginfo(f'[{self.name}] {what}: GNSS error by the laser on the outline ({err[0]:.2f}, '
-                          f'{err[1]:.2f}) m, {seen} direction(s) observed')
-        return float(err[0]), float(err[1])
+        """(ex, ey) by the laser on the buildings' outline (outline_fix), None without an observation."""
+        return laser_gnss_error(self, self.guard, what)
 
 
 def _fmt(p) -> str:
