@@ -4,8 +4,9 @@ profile: GNSS bias, gusts, thermal noise and offset, the seed's litres needed), 
 holders. Prints, per pour and in total: judged out correctly, judged out short of its water (must be 0),
 out but left for a top-up, short (the tank not enough), litres into the fire per litre pumped.
 
-    bench/bench_indoor_pour.py [--seeds 1-12] [--holders in0_w,in0_e,...] [--track-from 3]
-Writes bench/results/indoor_pour.json (with --track-from: indoor_pour_track_from_<id>.json)."""
+    bench/bench_indoor_pour.py [--seeds 1-12] [--holders in0_w,in0_e,...] [--track-from 3] [--progress 0.97]
+Writes bench/results/indoor_pour.json (with --track-from: indoor_pour_track_from_<id>.json; with --progress:
+indoor_pour_topup_<percent>[_track_from_<id>].json)."""
 import argparse
 import json
 import os
@@ -29,15 +30,20 @@ def main():
     ap.add_argument('--track-from', type=int, default=None,
                     help="robot id whose GNSS bias places the fire's track (default: the pouring UAV's own; 3: "
                          'the other water UAV, as when one found the fire and the other waters it)')
+    ap.add_argument('--progress', type=float, default=0.0,
+                    help='share of its need the fire already holds: a top-up of a fire a dry tank left nearly out '
+                         '(0.97: the fire hardly warmer than its wall)')
     ap.add_argument('--out', default=os.path.join(HERE, 'results', 'indoor_pour.json'))
     args = ap.parse_args()
-    if args.track_from is not None and args.out == ap.get_default('out'):
-        args.out = os.path.join(HERE, 'results', f'indoor_pour_track_from_{args.track_from}.json')
+    if args.out == ap.get_default('out'):
+        name = 'indoor_pour' + (f'_topup_{round(100 * args.progress)}' if args.progress > 0 else '')
+        name += f'_track_from_{args.track_from}' if args.track_from is not None else ''
+        args.out = os.path.join(HERE, 'results', name + '.json')
     from sim_ual import pour
     rows, t0 = [], time.time()
     for seed in seed_range(args.seeds):
         for holder in args.holders.split(','):
-            o = pour(seed, holder=holder, track_from=args.track_from)
+            o = pour(seed, holder=holder, track_from=args.track_from, progress=args.progress)
             verdict = ('out' if o['extinguished'] and o['progress'] >= 1.0 else
                        'FALSE_OUT' if o['extinguished'] else
                        'not_judged' if o['progress'] >= 1.0 else 'short')
@@ -49,7 +55,7 @@ def main():
     n = len(rows)
     count = {v: sum(r['verdict'] == v for r in rows) for v in ('out', 'FALSE_OUT', 'not_judged', 'short')}
     eff = sum(r['into'] for r in rows) / max(1e-9, sum(r['pumped'] for r in rows))
-    summary = {'pours': n, 'track_from': args.track_from, **count, 'litres_into_per_litre_pumped': round(eff, 3),
+    summary = {'pours': n, 'track_from': args.track_from, 'progress': args.progress, **count, 'litres_into_per_litre_pumped': round(eff, 3),
                'wall_s': round(time.time() - t0, 1)}
     print(f"{n} pours: out and judged out {count['out']}, judged out short of its water {count['FALSE_OUT']}, "
           f"out but left for a top-up {count['not_judged']}, short {count['short']}; "

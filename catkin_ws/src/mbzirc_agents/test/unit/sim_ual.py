@@ -154,13 +154,14 @@ def indoor_fire(sim, holder_id):
 
 
 def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profile_name='realistic',
-         timeout=120.0, litres=None, track_from=None):
+         timeout=120.0, litres=None, track_from=None, progress=0.0):
     """One ExtinguishIndoorFire goal on one tank against ual_sim's world under `profile_name`, seed `seed`:
     a water UAV placed start_distance m in front of indoor fire `holder` (at its height, facing it), its track
     at the fire as its own GNSS frame puts it (truth + the UAV's bias then; track_from: another robot's id, the
     track placed with that robot's bias instead, as when one robot found the fire and another waters it).
     need: litres the fire needs (None:
-    the seed's draw; a large value measures the whole tank). litres: the tank (None: full).
+    the seed's draw; a large value measures the whole tank). litres: the tank (None: full). progress: the share
+    of its need the fire already holds (a top-up of a fire left nearly out by a tank that ran dry).
     Returns a dict: pumped, into (L into the fire), progress, status, extinguished, message, misses, ual."""
     from ual_sim.sim import Simulation
     from ual_sim.uncertainty import profile
@@ -172,6 +173,7 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
     fire = sim.fires.fires[i]
     if need is not None:
         fire.litres_needed = need
+    fire.litres = progress * fire.litres_needed
     rid = next(rid for rid, r in sim.robots.items() if r.is_uav and r.water > 0)
     r = sim.robots[rid]
     c, n = sim.fires.pos[i], sim.fires.normal[i]
@@ -199,7 +201,7 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
         s.send(ExtinguishIndoorFireGoal(fire_id=7))
         status = s.wait(timeout)
         res = s.result
-        return {'pumped': tank - r.water, 'into': fire.litres, 'progress': fire.progress, 'status': status,
+        return {'pumped': tank - r.water, 'into': fire.litres - progress * fire.litres_needed, 'progress': fire.progress, 'status': status,
                 'extinguished': bool(res.extinguished) if res is not None else False,
                 'message': res.message if res is not None else s.text, 'misses': ual.misses(), 'ual': ual,
                 'need': fire.litres_needed, 'agent': agent, 'backend': be}

@@ -31,3 +31,29 @@ def test_one_tank_puts_out_and_confirms_nearly_every_indoor_fire(outcomes):
     good = [p for p, o in zip(POURS, outcomes) if o['extinguished'] and o['progress'] >= 1.0]
     detail = [(p, round(o['progress'], 3), o['message'][:60]) for p, o in zip(POURS, outcomes)]
     assert len(good) >= 10, detail
+
+
+TOP_UPS = POURS                  # the same untuned seeds and holders, each fire left at 97 % by a dry tank
+
+
+@pytest.fixture(scope='module')
+def top_ups():
+    return [pour(seed, holder=holder, progress=0.97) for seed, holder in TOP_UPS]
+
+
+def test_a_top_up_never_judges_out_a_fire_nearly_out_that_it_did_not_finish(top_ups):
+    """A fire left at 97 % stands only a few degC over its wall, under the detector's test, and reads cold
+    soon after water: a pour whose jet missed it must not call it out (before the ring of flames was looked
+    for under a warmer wall: 2 of these 12 judged out at 97 %, no water in)."""
+    wrong = [(p, o['progress'], o['message']) for p, o in zip(TOP_UPS, top_ups)
+             if o['extinguished'] and o['progress'] < 1.0]
+    assert not wrong, wrong
+
+
+def test_a_top_up_finds_a_faint_fire_by_its_ring_of_flames(top_ups):
+    """The look beside the watering pose takes a ring of flames around a cooler hole however faint (a
+    sun-heated wall rings none), not only an area 10 degC over its wall: at least 4 of the 12 fires at 97 %
+    finished and confirmed (before: 1; realistic seed 101's in2_e stayed at 97 % through two top-ups)."""
+    good = [p for p, o in zip(TOP_UPS, top_ups) if o['extinguished'] and o['progress'] >= 1.0]
+    detail = [(p, round(o['progress'], 3), o['message'][:60]) for p, o in zip(TOP_UPS, top_ups)]
+    assert len(good) >= 4, detail

@@ -364,12 +364,12 @@ class ExtinguishIndoorFire(AgentTask):
         world: a fire 6 deg off the heading read 3.9 deg off at 1.5 m, 1.4 deg at 1.2 m, none at 1.0 m), so
         the aim stopped short of the hole while the wandering GNSS fix took the UAV sideways."""
         spot = self.contrast.warm_spot()
-        if spot is None or not spot[3] or spot[2] <= since or not math.isfinite(distance):
+        if spot is None or not spot.whole or spot.time <= since or not math.isfinite(distance):
             return seen
         fov = self.agent.p.forward_camera_fov
-        then = self.agent.pose_at(spot[2])
-        rise = distance * math.tan(pixel_bearing(spot[1], fov))
-        return Sighting(pixel_bearing(spot[0], fov), float(then[3]), rise, float(then[2]))
+        then = self.agent.pose_at(spot.time)
+        rise = distance * math.tan(pixel_bearing(spot.row, fov))
+        return Sighting(pixel_bearing(spot.column, fov), float(then[3]), rise, float(then[2]))
 
     def _height_target(self, seen: Sighting) -> Optional[float]:
         """The height that puts the hot spot where the jet lands, None when it is there already (within
@@ -475,7 +475,7 @@ class ExtinguishIndoorFire(AgentTask):
         looks = [(0.0, 0.0), (LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)]
         if a.ROBOT_TYPE == 'uav':
             looks += [(0.0, LOOK_CLIMB), (0.0, -LOOK_CLIMB)]
-        best = None                                      # (contrast, spot) of the warmest area seen
+        best = None                                      # (rank, spot) of the likeliest fire seen
         for turn, climb in looks:
             if turn or climb:
                 self.feedback('LOOKING', f'fire not in sight: looking {math.degrees(turn):+.0f} deg, {climb:+.1f} m')
@@ -484,18 +484,20 @@ class ExtinguishIndoorFire(AgentTask):
             since = a.backend.now()
             spot, end = None, since + AIM_SIGHTING_WAIT
             while a.backend.now() < end:
-                spot = self.contrast.warm_spot(LOOK_MIN_RISE)
-                if spot is not None and spot[2] > since:
+                ring = self.contrast.warm_spot(ringed=True)
+                warm = self.contrast.warm_spot(LOOK_MIN_RISE)
+                spot = next((s for s in (ring, warm) if s is not None and s.time > since), None)
+                if spot is not None:
                     break
-                spot = None
                 self._wait_off_walls(0.1, yaw + turn)
             if spot is None:
                 continue
             if self.sensed.latest_fire()[1] > since:     # the detector's fire: no wall passes its test
-                best = (math.inf, spot)
+                best = ((True, math.inf), spot)
                 break
-            if best is None or spot[4] > best[0]:
-                best = (spot[4], spot)
+            rank = (spot.ringed, spot.contrast)
+            if best is None or rank > best[0]:
+                best = (rank, spot)
         if best is None:
             a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or '
                               'below it')
@@ -504,14 +506,15 @@ class ExtinguishIndoorFire(AgentTask):
             return None
         spot = best[1]
         fov = a.p.forward_camera_fov
-        then = a.pose_at(spot[2])
-        new_yaw = float(then[3]) + pixel_bearing(spot[0], fov)
+        then = a.pose_at(spot.time)
+        new_yaw = float(then[3]) + pixel_bearing(spot.column, fov)
         if a.ROBOT_TYPE == 'uav':
-            rise = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot[1], fov)) - a.p.jet_rise
+            rise = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot.row, fov)) - a.p.jet_rise
             reach = a.p.aim_height_range
             self.aim_z = max(z0 - reach, min(z0 + reach, float(then[2]) + rise))
-        why = ('the fire detector\'s fire' if math.isinf(best[0])
-               else f'the warmest area, {best[0]:.1f} degC over its wall,')
+        why = ('the fire detector\'s fire' if math.isinf(best[0][1]) else
+               f'a ring of flames, {spot.contrast:.1f} degC over its wall,' if spot.ringed else
+               f'the warmest area, {spot.contrast:.1f} degC over its wall,')
         a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose: {why} '
                           f'{math.degrees(wrap_angle(new_yaw - yaw)):+.0f} deg off the heading, '
                           f'{self._held_z(then) - z0:+.2f} m up: turning onto it')
@@ -833,14 +836,14 @@ class ExtinguishIndoorFire(AgentTask):
         of the wall turned -13 deg twice in a row, then its tank ran dry)."""
         a = self.agent
         spot = self.contrast.warm_spot()
-        if spot is None or not spot[3] or spot[2] < self.raw_turn_time + RAW_TURN_SETTLE:
+        if spot is None or not spot.whole or spot.time < self.raw_turn_time + RAW_TURN_SETTLE:
             return yaw
-        bearing = pixel_bearing(spot[0], a.p.forward_camera_fov)
+        bearing = pixel_bearing(spot.column, a.p.forward_camera_fov)
         climb = self._raw_climb(spot)
         turn = abs(bearing) >= a.p.aim_bearing_tolerance
         if not turn and climb is None:
             return yaw
-        new_yaw = float(a.pose_at(spot[2])[3]) + bearing if turn else yaw
+        new_yaw = float(a.pose_at(spot.time)[3]) + bearing if turn else yaw
         if climb is not None:
             self.aim_z += climb
             if self.frozen_true_z is not None:
@@ -863,7 +866,7 @@ class ExtinguishIndoorFire(AgentTask):
         a = self.agent
         if a.ROBOT_TYPE != 'uav' or self.watering_z is None or self.aim_z is None:
             return None
-        error = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot[1], a.p.forward_camera_fov)) - a.p.jet_rise
+        error = a.p.indoor_fire_distance * math.tan(pixel_bearing(spot.row, a.p.forward_camera_fov)) - a.p.jet_rise
         if abs(error) < a.p.aim_height_tolerance:
             return None
         step = max(-a.p.aim_height_step, min(a.p.aim_height_step, error))
