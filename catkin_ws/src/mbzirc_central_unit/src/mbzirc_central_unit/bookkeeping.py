@@ -39,7 +39,7 @@ class Bookkeeping:
         self.uninitialized_since: dict[str, float] = {}   # agents seen ready, UNINITIALIZED since then
         self.leg_backoff = LegBackoff(params.leg_blocked_backoff, params.leg_blocked_backoff_max,
                                       params.max_blocked_legs)
-        self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit)
+        self.unconfirmed = UnconfirmedFires(params.not_seen_hot_limit, params.facade_top_up_limit)
         # facade floors searched once more, whatever their count: a fire there was judged misplaced
         # (failure_rules.py); the next search of the floor that ends takes the floor off
         self.search_again: set[int] = set()
@@ -88,7 +88,7 @@ class Bookkeeping:
             if gave_up:
                 self.failures[key] = max(self.failures[key], self.p.max_failures)
         elif kind == NOT_SEEN_HOT:
-            note = self.unconfirmed.note(cmd.target, cmd.agent_id)
+            note = self.unconfirmed.note(cmd.target, cmd.agent_id, facade=cmd.task == C.EXTINGUISH_FACADE_FIRE)
             if note:
                 self.notes.append(note)
                 if cmd.task == C.EXTINGUISH_FACADE_FIRE and self.unconfirmed.search_again(cmd.target):

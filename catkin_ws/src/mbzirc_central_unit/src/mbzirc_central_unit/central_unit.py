@@ -111,6 +111,7 @@ class CentralUnit:
             leg_blocked_backoff_max=float(rospy.get_param("~leg_blocked_backoff_max", C.LEG_BLOCKED_BACKOFF_MAX)),
             max_blocked_legs=int(rospy.get_param("~max_blocked_legs", C.MAX_BLOCKED_LEGS)),
             not_seen_hot_limit=int(rospy.get_param("~not_seen_hot_limit", C.NOT_SEEN_HOT_LIMIT)),
+            facade_top_up_limit=int(rospy.get_param("~facade_top_up_limit", C.FACADE_TOP_UP_LIMIT)),
             uavs_take_ground_floor_indoors=bool(rospy.get_param("~uavs_take_ground_floor_indoors", False)),
         )
         self.strategy = Strategy(params)

@@ -40,5 +40,6 @@ class StrategyParams:
     leg_blocked_backoff_max: float = C.LEG_BLOCKED_BACKOFF_MAX
     max_blocked_legs: int = C.MAX_BLOCKED_LEGS
     not_seen_hot_limit: int = C.NOT_SEEN_HOT_LIMIT
+    facade_top_up_limit: int = C.FACADE_TOP_UP_LIMIT
     # UAVs search the ground floor indoors when the UGV is gone (the agents accept floors 1-2 only now).
     uavs_take_ground_floor_indoors: bool = False

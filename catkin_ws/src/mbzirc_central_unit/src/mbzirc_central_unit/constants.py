@@ -71,6 +71,8 @@ LEG_BLOCKED_BACKOFF_MAX = 60.0
 MAX_BLOCKED_LEGS = 3
 # 'not seen hot' aborts (after water from its watering pose, any robots) before a fire is doubted (failure_rules.py)
 NOT_SEEN_HOT_LIMIT = 2
+# the same for a facade fire watered hot before (its hole locked and watered; failure_rules.py)
+FACADE_TOP_UP_LIMIT = 1
 # Transit altitude per UAV id: each UAV flies outside the building at its own altitude. 4 m apart: the agents'
 # boxes reach 1.5 m above and below a UAV (hold box 1 m + 0.5 m for the error of its reported height,
 # mbzirc_agents pose_error_boxes.py), and 0.5 m more on each UAV for the height it holds: a take-off goes its
