@@ -1026,3 +1026,63 @@ def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside
     sc.extinguish(timeout=60)
     assert yaw0 and abs(math.remainder(sc.ual.yaw - yaw0[0], 2 * math.pi)) < 0.05, \
         f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a faint warm area'
+
+
+class DriftsOutOfView:
+    """The fire seen hot and watered, then (after `after` s of pumping) out of the camera's view `offset` rad to
+    the left, as when the aim frozen on it drifts off: in view it is a ring of flames 25 degC over its wall
+    (the detector reports it), out of view the frame is bare wall (every area at the wall's level)."""
+
+    def __init__(self, sc, after=1.5, offset=0.5):
+        self.sc, self.after, self.offset, self.stop = sc, after, offset, False
+        self.drifted = False
+        rng = np.random.default_rng(11)
+        self.half_view = math.radians(33.0) / 2
+        sc.ual.thermal = lambda: (fake_thermal.ring_frame(25.0, (15.5, 15.5 - FOCAL * math.tan(self.bearing())),
+                                                          rng=rng)
+                                  if self.in_view() else fake_thermal.fire_frame(0.0, wall=35.0, rng=rng))
+        sc.be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.in_view())
+        sc.be.clock.start_thread(self._loop, name='drift')
+
+    def bearing(self):
+        u = self.sc.ual
+        with u.lock:
+            pos, yaw = u.pos.copy(), u.yaw
+        rel = math.atan2(FIRE[1] - pos[1], FIRE[0] - pos[0]) - yaw + (self.offset if self.drifted else 0.0)
+        return math.remainder(rel, 2 * math.pi)
+
+    def in_view(self):
+        return abs(self.bearing()) < self.half_view
+
+    def _loop(self):
+        be, since = self.sc.be, None
+        while not self.stop:
+            if self.sc.ual.pump and since is None:
+                since = be.clock.now()
+            if since is not None and be.clock.now() - since >= self.after:
+                self.drifted = True
+            be.clock.sleep(0.05)
+
+
+def test_realistic_107_a_fire_that_left_the_view_is_looked_for_beside_it_before_it_is_judged_out(scenes):
+    """Realistic seed 107 (52c0d45): a top-up's aim drifted off the fire, the whole view read at the wall's level
+    and the fire, 0.87 full and 26 degC over its wall beside the view, was reported out. After the cold answers
+    the robot looks LOOK_TURN to either side: the ring of flames there says it still burns; the goal succeeds
+    with the fire not judged out (left active). Before: extinguished."""
+    sc = scenes()
+    drift = DriftsOutOfView(sc)
+    sc.threads = (drift,)
+    s = sc.extinguish(timeout=60)
+    assert drift.drifted
+    assert s.status == 'succeeded' and not s.result.extinguished, s.result.message
+    assert 'beside the watering pose after the cold answers' in s.result.message, s.result.message
+    assert sc.statuses == []
+
+
+def test_a_fire_put_out_in_view_is_still_judged_out_after_the_look_beside_it(scenes):
+    """The look beside a fire that is out finds nothing (bare walls both sides): out, as before."""
+    sc = scenes()
+    fire = FireModel(sc, need=1.0)
+    sc.threads = (fire,)
+    s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message

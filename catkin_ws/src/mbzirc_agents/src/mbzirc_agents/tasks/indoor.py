@@ -246,6 +246,7 @@ class ExtinguishIndoorFire(AgentTask):
         self.on_jet = True                               # the last sighting's height correction was all sent
         self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
         self.raw_turn_time = -math.inf                    # when the frozen aim last turned on the raw image
+        self.watering_yaw = 0.0                           # the heading the last pour ended at
         self.contrast = FireContrast(agent.backend.now, agent.p.out_contrast, agent.p.thermal_period)
         # subscribed only while the task runs: each frame of the trial deserialised for nothing otherwise
         self.iface.add_demand(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
@@ -475,29 +476,7 @@ class ExtinguishIndoorFire(AgentTask):
         looks = [(0.0, 0.0), (LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)]
         if a.ROBOT_TYPE == 'uav':
             looks += [(0.0, LOOK_CLIMB), (0.0, -LOOK_CLIMB)]
-        best = None                                      # (rank, spot) of the likeliest fire seen
-        for turn, climb in looks:
-            if turn or climb:
-                self.feedback('LOOKING', f'fire not in sight: looking {math.degrees(turn):+.0f} deg, {climb:+.1f} m')
-                self.aim_z = z0 + climb if a.ROBOT_TYPE == 'uav' else None
-                self._turn_to(yaw + turn)
-            since = a.backend.now()
-            spot, end = None, since + AIM_SIGHTING_WAIT
-            while a.backend.now() < end:
-                ring = self.contrast.warm_spot(ringed=True)
-                warm = self.contrast.warm_spot(LOOK_MIN_RISE)
-                spot = next((s for s in (ring, warm) if s is not None and s.time > since), None)
-                if spot is not None:
-                    break
-                self._wait_off_walls(0.1, yaw + turn)
-            if spot is None:
-                continue
-            if self.sensed.latest_fire()[1] > since:     # the detector's fire: no wall passes its test
-                best = ((True, math.inf), spot)
-                break
-            rank = (spot.ringed, spot.contrast)
-            if best is None or rank > best[0]:
-                best = (rank, spot)
+        best = self._looks(yaw, z0, looks, 'fire not in sight', warm_too=True)
         if best is None:
             a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or '
                               'below it')
@@ -519,6 +498,56 @@ class ExtinguishIndoorFire(AgentTask):
                           f'{math.degrees(wrap_angle(new_yaw - yaw)):+.0f} deg off the heading, '
                           f'{self._held_z(then) - z0:+.2f} m up: turning onto it')
         return self._turn_to(new_yaw)
+
+    def _looks(self, yaw: float, z0: float, looks: list, why: str, warm_too: bool) -> Optional[tuple]:
+        """(rank, spot) of the likeliest fire seen in the looks [(turn rad, climb m)] from heading yaw and height
+        z0, each on a frame taken there: a spot while the detector reports a fire ends them ((True, inf)), else a ring of flames
+        (`ringed_spot`, LOCK_MIN_RISE x ~out_contrast over its wall) or, warm_too, an area LOOK_MIN_RISE x
+        ~out_contrast over its wall, ranked ringed first, then by contrast; None when none showed. The robot is
+        left at the last look's heading and height."""
+        a = self.agent
+        best = None
+        for turn, climb in looks:
+            if turn or climb:
+                self.feedback('LOOKING', f'{why}: looking {math.degrees(turn):+.0f} deg, {climb:+.1f} m')
+                self.aim_z = z0 + climb if a.ROBOT_TYPE == 'uav' else None
+                self._turn_to(yaw + turn)
+            since = a.backend.now()
+            spot, end = None, since + AIM_SIGHTING_WAIT
+            while a.backend.now() < end:
+                ring = self.contrast.warm_spot(ringed=True)
+                warm = self.contrast.warm_spot(LOOK_MIN_RISE) if warm_too else None
+                spot = next((s for s in (ring, warm) if s is not None and s.time > since), None)
+                if spot is not None:
+                    break
+                self._wait_off_walls(0.1, yaw + turn)
+            if spot is None:
+                continue
+            if self.sensed.latest_fire()[1] > since:     # the detector's fire: no wall passes its test
+                return (True, math.inf), spot
+            rank = (spot.ringed, spot.contrast)
+            if best is None or rank > best[0]:
+                best = (rank, spot)
+        return best
+
+    def _still_burning_beside(self, yaw: float) -> Optional[str]:
+        """After the cold answers, from the watering pose (heading yaw): a look LOOK_TURN rad to either side for
+        the fire the cold answers may have looked past; why it is not out (the detector's fire or a ring of
+        flames there), None when neither shows. The robot turns back to yaw.
+        Why (realistic seed 107 on 52c0d45): a top-up locked on a warm area 17 deg off its heading, the aim then
+        drifted off it, the locked pixels and the whole view read at the wall's level within 1.2 s, and the
+        fire, 0.87 full and 26 degC over its wall beside the view, was reported out: nothing in view is what
+        a fire out and a fire out of view both look like."""
+        a = self.agent
+        z0 = self._held_z(a.position())
+        seen = self._looks(yaw, z0, [(LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)], 'checking beside the fire', warm_too=False)
+        self.aim_z = z0 if a.ROBOT_TYPE == 'uav' else None
+        self._turn_to(yaw)
+        if seen is None:
+            return None
+        rank, spot = seen
+        what = 'the fire detector\'s fire' if math.isinf(rank[1]) else f'a ring of flames {spot.contrast:.1f} degC over its wall'
+        return f'{what} beside the watering pose after the cold answers: not judged out, left active'
 
     def _turn_in_place(self, yaw: float):
         """Hold where the robot is (at the held height), heading yaw; the pose it was at. No translation: a
@@ -571,6 +600,11 @@ class ExtinguishIndoorFire(AgentTask):
         elif not self._well_localised(ud.fire_id):
             raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
         out, why = self._water(ud.fire_id, cold, yaw)
+        if out:
+            beside = self._still_burning_beside(self.watering_yaw)
+            if beside is not None:
+                a.backend.logwarn(f'[{self.name}] fire {ud.fire_id}: {beside}')
+                out, why = False, beside
         if out:
             a.set_object_status(ud.fire_id, C.STATUS_EXTINGUISHED)
         water = a.water_level if math.isfinite(a.water_level) else 0.0
@@ -705,6 +739,7 @@ class ExtinguishIndoorFire(AgentTask):
                     self._freeze_aim(frozen)
         finally:
             a.stop_pump()
+            self.watering_yaw = float(pose[3])
         if cold.out:
             return True, 'extinguished'
         if not cold.seen_hot:                           # the tank ran dry during a top-up
