@@ -1,7 +1,10 @@
 """Facade standoffs placed by the laser on the buildings' known outline (tasks/facade.py fly_to_standoff,
 tasks/outline_fix.py): the approach to a facade fire is flown in the GNSS frame the laser measures, not on
 the GNSS fix alone, so a UAV whose fix is more than a metre off towards the facade stops where it should."""
+import math
+
 import numpy as np
+import pytest
 from mbzirc_comm_objs.msg import GoToFacadeFireGoal, Object, ObjectList
 from mbzirc_comm_objs.msg import TakeOffGoal
 
@@ -69,3 +72,22 @@ def test_without_a_scan_the_standoff_is_flown_on_gnss_and_it_is_said():
     assert status == 'succeeded'
     assert abs((11.4 - x) - 0.7) < 0.2, x
     assert any('flown on GNSS' in m for m in be.warns), be.warns
+
+
+def test_realistic_111_a_fix_off_away_from_the_facade_is_not_corrected_into_the_outline():
+    """Realistic seed 111: with a fix 1.5 m off away from facade A, the standoff moved by the whole error lay
+    inside the building's outline in the GNSS frame and the go-to refused it three times. Only the part of the
+    error that would bring the UAV nearer the wall moves the standoff: here none, so it stands 3.3 m out (the
+    hole's centring closes in by the camera and the laser) and the goal succeeds."""
+    status, x, nearest, be = go_to_fire((1.3, 0.0, 0.0))
+    assert status == 'succeeded'
+    assert abs((11.4 - x) - 3.3) < 0.3, x
+    assert not any('inside the building outline' in m for m in be.warns + be.errors)
+
+
+def test_only_the_outward_part_of_the_error_moves_the_standoff():
+    from mbzirc_agents.tasks.facade import outward_error
+    assert outward_error((-1.2, 0.4), 0.0) == pytest.approx((-1.2, 0.0))   # facing +x (facade C): outward -x
+    assert outward_error((1.2, 0.4), 0.0) == (0.0, 0.0)
+    assert outward_error((0.3, 0.9), -math.pi / 2) == pytest.approx((0.0, 0.9))   # facing -y (facade A): +y
+    assert outward_error(None, 0.0) is None

@@ -200,15 +200,30 @@ class CentringWindow:
         return self.ctl.centred(mean) and spread <= self.spread_max
 
 
+def outward_error(err: Optional[tuple], yaw: float) -> Optional[tuple]:
+    """The part of a GNSS error err (GNSS less truth) that would put a UAV facing a wall (heading yaw) nearer
+    to it than its GNSS fix says: its component along the wall's outward normal when positive, else none.
+    Why only that part: the other way the UAV merely stands further out (the hole's centring closes the
+    distance by the camera and the laser), while the GNSS-frame goal that part would give lies inside the
+    building's known outline, which a go-to refuses (realistic seed 111: A_4's standoff refused three times,
+    'waypoint (23.3, 19.3, 0.6) is inside the building outline', with a fix 1.5 m off away from facade A)."""
+    if err is None:
+        return None
+    n = (-math.cos(yaw), -math.sin(yaw))
+    along = err[0] * n[0] + err[1] * n[1]
+    return (along * n[0], along * n[1]) if along > 0.0 else (0.0, 0.0)
+
+
 def fly_to_standoff(task: AgentTask, guard: LegGuard, pos, yaw: float, what: str) -> None:
-    """Go to a standoff placed from a facade's known plane (pos, facing yaw), in the GNSS frame the laser
-    measures on the buildings' outline (outline_fix) before the flight, and again once there: flown again when
-    it is more than STANDOFF_REFIX off (the error wandered on the way). Without an observation, on GNSS.
+    """Go to a standoff placed from a facade's known plane (pos, facing yaw) moved out by the GNSS error the
+    laser measures on the buildings' outline (outline_fix) that would put the UAV nearer the wall
+    (`outward_error`), before the flight and again once there: flown again when it is more than STANDOFF_REFIX
+    off (the error wandered on the way). Without an observation, on GNSS.
     Why (realistic seed 104, explore run): a UAV whose GNSS fix was 1.2-1.8 m off towards facade C flew its
     approach to the hole's standoff, 1.5 m out from the facade's known plane, into the facade."""
-    err = laser_gnss_error(task, guard, f'{what}, before the approach')
+    err = outward_error(laser_gnss_error(task, guard, f'{what}, before the approach'), yaw)
     task.call_task_or_raise('go_to', {'waypoint': (shifted(pos, err), yaw)})
-    err = laser_gnss_error(task, guard, f'{what}, there')
+    err = outward_error(laser_gnss_error(task, guard, f'{what}, there'), yaw)
     here = task.agent.position()
     target = shifted(pos, err)
     if err is not None and math.hypot(target[0] - here[0], target[1] - here[1]) > STANDOFF_REFIX:
