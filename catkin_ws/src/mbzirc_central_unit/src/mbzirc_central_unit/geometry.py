@@ -136,7 +136,8 @@ def facade_of(holder: Point, standoff: float = C.FACADE_STANDOFF) -> str:
     102: one 0.3 m north of facade A counted as facade D, two UAVs hit facade A). Why open: the extension
     hides facade D below 4.5 m (realistic seed 111: an estimate of A_4 1.8 m into the tower, nearer D, got a
     viewpoint inside the extension and was never watered)."""
-    normal, _ = open_face(_at_least(holder, 1.0), standing_at(_at_least(holder, 1.0), c3.FOOTPRINTS), standoff)
+    p = _at_least(holder, 1.0)
+    normal, _ = open_face(p, standing_at(p, c3.FOOTPRINTS), standoff)
     return FACADE_LETTERS[tuple(float(n) for n in normal)]
 
 

@@ -246,7 +246,6 @@ class ExtinguishIndoorFire(AgentTask):
         self.on_jet = True                               # the last sighting's height correction was all sent
         self.frozen_true_z: Optional[float] = None       # the frozen aim's true height (altimeter), None: unfrozen
         self.raw_turn_time = -math.inf                    # when the frozen aim last turned on the raw image
-        self.watering_yaw = 0.0                           # the heading the last pour ended at
         self.contrast = FireContrast(agent.backend.now, agent.p.out_contrast, agent.p.thermal_period)
         # subscribed only while the task runs: each frame of the trial deserialised for nothing otherwise
         self.iface.add_demand(self.name, RAW_THERMAL_TOPIC, numpy_msg(Float64MultiArray),
@@ -480,8 +479,7 @@ class ExtinguishIndoorFire(AgentTask):
         if best is None:
             a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or '
                               'below it')
-            self.aim_z = z0 if a.ROBOT_TYPE == 'uav' else None
-            self._turn_to(yaw)
+            self._back_to(yaw, z0)
             return None
         spot = best[1]
         fov = a.p.forward_camera_fov
@@ -530,6 +528,11 @@ class ExtinguishIndoorFire(AgentTask):
                 best = (rank, spot)
         return best
 
+    def _back_to(self, yaw: float, z0: float) -> None:
+        """Back at heading yaw and (UAV) the height z0 it looked from, where it stands."""
+        self.aim_z = z0 if self.agent.ROBOT_TYPE == 'uav' else None
+        self._turn_to(yaw)
+
     def _still_burning_beside(self, yaw: float) -> Optional[str]:
         """After the cold answers, from the watering pose (heading yaw): a look LOOK_TURN rad to either side for
         the fire the cold answers may have looked past; why it is not out (the detector's fire or a ring of
@@ -541,8 +544,7 @@ class ExtinguishIndoorFire(AgentTask):
         a = self.agent
         z0 = self._held_z(a.position())
         seen = self._looks(yaw, z0, [(LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)], 'checking beside the fire', warm_too=False)
-        self.aim_z = z0 if a.ROBOT_TYPE == 'uav' else None
-        self._turn_to(yaw)
+        self._back_to(yaw, z0)
         if seen is None:
             return None
         rank, spot = seen
@@ -599,9 +601,9 @@ class ExtinguishIndoorFire(AgentTask):
                                     'cold after; no water spent')
         elif not self._well_localised(ud.fire_id):
             raise TaskError(f'fire {ud.fire_id} not in sight of the thermal camera: no water spent')
-        out, why = self._water(ud.fire_id, cold, yaw)
+        out, why, yaw = self._water(ud.fire_id, cold, yaw)
         if out:
-            beside = self._still_burning_beside(self.watering_yaw)
+            beside = self._still_burning_beside(yaw)
             if beside is not None:
                 a.backend.logwarn(f'[{self.name}] fire {ud.fire_id}: {beside}')
                 out, why = False, beside
@@ -613,7 +615,7 @@ class ExtinguishIndoorFire(AgentTask):
 
     def _water(self, fire_id: int, cold: ColdConfirmation, yaw: float) -> tuple:
         """Pump from here, facing yaw (the watering pose: where the fire was checked from), until the fire
-        is judged out or the tank is empty; (out, why).
+        is judged out or the tank is empty; (out, why, the heading the pour ended at).
 
         A fire not seen hot yet (a confirmed, well-localised track that reads cold) is topped up: it gets
         ~top_up_time of water in which to show hot. Why: a fire being filled cools down in the thermal
@@ -739,19 +741,19 @@ class ExtinguishIndoorFire(AgentTask):
                     self._freeze_aim(frozen)
         finally:
             a.stop_pump()
-            self.watering_yaw = float(pose[3])
+        yaw = float(pose[3])
         if cold.out:
-            return True, 'extinguished'
+            return True, 'extinguished', yaw
         if not cold.seen_hot:                           # the tank ran dry during a top-up
             raise TaskError(f'fire {fire_id} {NOT_SEEN_HOT}: the tank ran dry topping it up, left active')
         if dry_early is not None:
             why = (f'the tank ran dry {100 * dry_early:.0f} % into the soak (under ~dry_soak_min_share '
                    f'{100 * a.p.dry_soak_min_share:.0f} %): left for a top-up')
             a.backend.loginfo(f'[{self.name}] fire {fire_id}: {why}')
-            return False, why
+            return False, why, yaw
         out, why = dry_tank_verdict(cold)
         a.backend.loginfo(f'[{self.name}] fire {fire_id}: tank dry, {why}')
-        return out, 'extinguished' if out else why
+        return out, 'extinguished' if out else why, yaw
 
     def _say_why_not_counted(self, fire_id: int, pose, here, flowing: bool) -> None:
         """Log (throttled) why a cold answer does not count: no water flowing, off the watering pose (how far,

@@ -9,7 +9,6 @@ in the GNSS frame of the moment).
 """
 from __future__ import annotations
 
-import math
 from typing import Optional, Sequence
 
 from ..pad_fix import face_errors, gnss_error
@@ -46,8 +45,3 @@ def shifted(point: Sequence[float], err: Optional[tuple]) -> tuple:
     """A point placed from the known outline, in the GNSS frame of the error `err` (unchanged without one)."""
     p = tuple(float(v) for v in point)
     return p if err is None else (p[0] + err[0], p[1] + err[1], *p[2:])
-
-
-def worth_moving(err: Optional[tuple], tolerance: float) -> bool:
-    """Whether a correction err is larger than tolerance (m, horizontal)."""
-    return err is not None and math.hypot(err[0], err[1]) > tolerance

@@ -20,7 +20,7 @@ from ..agent_task import AgentTask, MoveTimedOut, TaskError
 from ..leg_guard import LegGuard
 from ..wall_clearance import off_the_walls
 from .common import parse_path, parse_pose
-from .outline_fix import laser_gnss_error
+from .outline_fix import laser_gnss_error, shifted
 
 LANDED = (C.UAL_LANDED_DISARMED, C.UAL_LANDED_ARMED)
 PAD_MOVE_TIME = 8.0    # s at most for the correction low over the pad (<= 2 m at the UAL's slow speed near ground)
@@ -438,8 +438,8 @@ class GoHomeAndRefill(AgentTask):
         err = self._gnss_error('over the pad')
         if err is not None:
             try:
-                self.call_task_or_raise('go_to', {'waypoint': ((spot[0] + err[0], spot[1] + err[1], here[2]),
-                                                               None)}, 'over the pad by the laser')
+                self.call_task_or_raise('go_to', {'waypoint': (shifted((spot[0], spot[1], here[2]), err), None)},
+                                        'over the pad by the laser')
             except TaskError as e:
                 a.backend.logwarn(f'[{self.name}] {e}: going down where it is')
         reserve_landing_column(self, float(home[0]), float(home[1]))   # on the pad (public), not on GNSS
@@ -452,7 +452,7 @@ class GoHomeAndRefill(AgentTask):
         err = self._gnss_error('low over the pad')
         if err is not None:
             here = a.position()
-            target = (spot[0] + err[0], spot[1] + err[1], here[2])
+            target = shifted((spot[0], spot[1], here[2]), err)
             if math.hypot(target[0] - here[0], target[1] - here[1]) > 0.1:
                 self._correct_low_over_pad(target)
         land_here(self)
