@@ -37,6 +37,7 @@ from sensor_msgs.msg import LaserScan
 
 from . import constants as C
 from .agent_task import TaskError
+from .control import front_distance, nearest_return
 
 MIN_BEAMS = 2              # returns in the corridor that make it blocked (one stray beam does not)
 
@@ -81,8 +82,15 @@ def is_blind(ranges: Sequence[float]) -> bool:
     return r.size > 0 and bool(np.all(np.isnan(r)))
 
 
+def malformed(msg: LaserScan) -> bool:
+    """True for a scan nothing can be placed from: no ranges, or angles not finite or not increasing."""
+    return (not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment)
+            or msg.angle_increment <= 0)
+
+
 class LegGuard:
-    """A motion task's check of its straight legs against its laser (`scan`).
+    """A motion task's view of its laser (`scan`): the check of its straight legs, and what the facade's
+    velocity loop keeps off (the range ahead, the nearest return). One parser of the topic per task.
 
     Args:
         task: the AgentTask that moves.
@@ -92,19 +100,30 @@ class LegGuard:
         self.task = task
         self.agent = task.agent
         self._scan: Optional[Tuple[Any, float, np.ndarray]] = None     # (LaserScan, receive time, pose then)
+        self._blind = False                                              # the latest usable scan's every beam NaN
         self.reason = ''                                                 # why the last check blocked
         # always (not only while the task runs): a leg checks the scan of before its start, not none
         task.iface.add_subscriber(None, 'scan', LaserScan, self._on_scan)
+        # bad input is reported while the task runs (the always-on cache above stays silent: one report)
+        task.iface.add_subscriber(task.name, 'scan', LaserScan, self._report_bad)
 
     def _on_scan(self, msg: LaserScan) -> None:
-        """Keep the latest scan with the pose of its arrival; a malformed one is ignored (passage.py says so)."""
-        if not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment):
+        """Keep the latest scan with the pose of its arrival; a malformed one is ignored."""
+        if malformed(msg):
             return
         try:
             pose = self.agent.position(wait=0.0)
         except TaskError:
             return
+        self._blind = is_blind(msg.ranges)
         self._scan = (msg, self.agent.backend.now(), pose)
+
+    def _report_bad(self, msg: LaserScan) -> None:
+        be = self.agent.backend
+        if malformed(msg):
+            be.logerr_throttle(5.0, f'[{self.task.name}] scan: empty or bad angles, ignored')
+        elif is_blind(msg.ranges):
+            be.logerr_throttle(5.0, f'[{self.task.name}] scan: every beam NaN (laser blind): holding')
 
     def _fresh(self) -> Optional[Tuple[Any, np.ndarray]]:
         scan = self._scan
@@ -123,9 +142,26 @@ class LegGuard:
                            msg.range_max if msg.range_max > 0 else math.inf, keep_near=True)
 
     def blind(self) -> bool:
-        """True when the latest fresh scan is blind (every beam NaN)."""
+        """True while the latest usable scan, however old, is blind (every beam NaN): a laser that went blind
+        and then silent still sees nothing (no velocity towards a wall it cannot see)."""
+        return self._blind
+
+    def front_range(self) -> float:
+        """Distance ahead to the wall the latest fresh scan sees (control.front_distance), inf without one."""
         fresh = self._fresh()
-        return fresh is not None and is_blind(fresh[0].ranges)
+        if fresh is None:
+            return math.inf
+        msg = fresh[0]
+        return front_distance(msg.ranges, msg.angle_min, msg.angle_increment)
+
+    def nearest(self) -> Tuple[float, float]:
+        """(distance, body angle) of the latest fresh scan's closest return (control.nearest_return), (inf, 0)
+        without one."""
+        fresh = self._fresh()
+        if fresh is None:
+            return math.inf, 0.0
+        msg = fresh[0]
+        return nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
 
     def stop_when(self, target: Sequence[float], tolerance: float):
         """A stop_when for RobotAgent.move_to on the straight leg to target: True (and `reason` set) when the
@@ -166,4 +202,4 @@ class LegGuard:
             raise TaskError(f'{what}: {self.reason}')
 
 
-__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'is_blind']
+__all__ = ['LegGuard', 'MIN_BEAMS', 'blocking_distance', 'corridor_distances', 'is_blind', 'malformed']

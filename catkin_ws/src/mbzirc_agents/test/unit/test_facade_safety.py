@@ -61,6 +61,7 @@ class Scene:
         self.circles = None                       # [(arena point, opening m or None)] seen by the camera
         self.hot = lambda: True
         self.wander = None                        # t -> offset of the UAV from where its controller holds it
+        self.blind = False                        # every beam of the scans NaN
         self.stop = False
         be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=self.hot())
         be.clock.start_thread(self._loop, name='scene')
@@ -86,6 +87,8 @@ class Scene:
                 inc = 2 * math.pi / 720
                 a = -math.pi + inc * np.arange(720)
                 r = np.where(np.abs(a) < 1.2, wall / np.maximum(np.cos(a), 1e-3), np.inf)
+                if self.blind:
+                    r = np.full(720, np.nan)
                 subs['scan'](LaserScan(angle_min=-math.pi, angle_increment=inc, ranges=list(r)))
             self.be.clock.sleep(0.1)
 
@@ -382,6 +385,22 @@ def test_laser_clamps_forward_motion_whatever_the_hole_says(scene):
     vx = [m.twist.linear.x for m in be.pubs['ual/set_velocity']]   # yaw 0: world x = forward
     assert len(vx) > 10
     assert max(vx) <= 0.8 * (1.2 - 1.0) + 1e-6
+
+
+def test_a_blind_laser_holds_the_centring_loop_and_says_so(scene):
+    """Bad input: scans whose every beam is NaN. The UAV sends no velocity (a wall it cannot see may be
+    ahead), says why, and the goal ends by its timeout, the robot holding."""
+    agent, ual, be, sc = scene
+    agent.p.centering_timeout = 3.0
+    sc.hole = np.array(HOLDER) + [0.5, 0.3, 0.0]             # a hole it would fly towards
+    sc.wall = 1.5
+    sc.blind = True
+    be.pubs['ual/set_velocity'].clear()
+    s, status = extinguish(be)
+    assert status == 'aborted'
+    v = [(m.twist.linear.x, m.twist.linear.y, m.twist.linear.z) for m in be.pubs['ual/set_velocity']]
+    assert len(v) > 10 and np.abs(v).max() == 0.0
+    assert any('laser blind' in m for m in be.errors)
 
 
 def test_hole_centering_clamp_and_front_distance():

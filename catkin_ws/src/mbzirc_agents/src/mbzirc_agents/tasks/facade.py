@@ -13,13 +13,11 @@ from typing import Optional
 import numpy as np
 from circle_detector import hole_choice
 from geometry_msgs.msg import PointStamped
-from sensor_msgs.msg import LaserScan
 from mbzirc_arena.buildings import nearest_face, standing_at
 from mbzirc_arena.holders import known_holder, nearest_holder
 
 from .. import constants as C
-from ..control import (HoleCentering, body_to_world, front_distance, keep_off_return, nearest_return,
-                       world_to_body, yaw_rate_to)
+from ..control import HoleCentering, body_to_world, keep_off_return, world_to_body, yaw_rate_to
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facade_standoff, faces_wall
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, WaterFlow, dry_tank_verdict
@@ -267,45 +265,15 @@ class ExtinguishFacadeFire(AgentTask):
         self.locked_hole: Optional[np.ndarray] = None
         self.locked_open = False                # the depth camera saw through the locked circle
         self.lock_count = 0                     # how many locks this run (a new lock resets "cold")
-        self._front = (math.inf, -1e9)          # (laser distance ahead m, receive time)
-        self._nearest = (math.inf, 0.0, -1e9)   # (laser's nearest return m, its body angle, receive time)
-        self._blind_since: Optional[float] = None   # every beam of the scans NaN since then
-        self.iface.add_subscriber(self.name, 'scan', LaserScan, self._on_scan)
-        self.guard = LegGuard(self)             # the approach's GNSS error by the laser on the outline
+        self.guard = LegGuard(self)             # its laser: the outline fix, the range ahead, the nearest return
         # switches the (lazy) circle detector on while this task runs: holes arrive in sensed_objects
         self.iface.add_demand(self.name, C.HOLE_DEMAND_TOPIC, PointStamped)
-
-    def _on_scan(self, msg: LaserScan) -> None:
-        """Keep the distance ahead; a malformed scan is reported and ignored."""
-        if (not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment)
-                or msg.angle_increment <= 0):
-            self.agent.backend.logerr_throttle(5.0, 'scan: empty or bad angles, ignored')
-            return
-        now = self.agent.backend.now()
-        if np.isnan(np.asarray(msg.ranges, dtype=float)).all():
-            self.agent.backend.logerr_throttle(5.0, 'scan: every beam NaN (laser blind): holding')
-            self._blind_since = now if self._blind_since is None else self._blind_since
-            return
-        self._blind_since = None
-        self._front = (front_distance(msg.ranges, msg.angle_min, msg.angle_increment), now)
-        self._nearest = (*nearest_return(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min), now)
-
-    def laser_blind(self) -> bool:
-        """True while the scans carry no valid beam at all: no velocity towards a wall we cannot see."""
-        return self._blind_since is not None
 
     def keep_off_laser(self, v: np.ndarray, yaw: float, min_dist: float) -> np.ndarray:
         """v kept off the laser's nearest return (fresh scans only): walls as they are, whatever the GNSS
         error of the pose the arena model is placed with."""
-        d, ang, t = self._nearest
-        if self.agent.backend.now() - t > C.SCAN_MAX_AGE:
-            return v
+        d, ang = self.guard.nearest()
         return keep_off_return(v, yaw, d, ang, min_dist)
-
-    def front_range(self) -> float:
-        """Laser distance to the wall ahead (inf when no fresh scan says so)."""
-        d, t = self._front
-        return d if self.agent.backend.now() - t <= C.SCAN_MAX_AGE else math.inf
 
     def run(self, ud) -> str:
         a = self.agent
@@ -476,9 +444,9 @@ class ExtinguishFacadeFire(AgentTask):
                 if stalled:
                     raise TaskError(stalled)
             min_wall = a.p.min_wall_distance
-            v = steer.velocity(target, p[3], self.front_range(), min_wall)
+            v = steer.velocity(target, p[3], self.guard.front_range(), min_wall)
             v = self.keep_off_laser(keep_off_walls(p, v, min_wall), p[3], min_wall)
-            if self.laser_blind():
+            if self.guard.blind():
                 v = np.zeros(3)                         # bad input: hold, the timeouts decide the rest
             a.send_velocity(v, yaw_rate_to(p[3], wall_yaw))
             state = 'SHOOTING' if pumping_since is not None else 'LOOKING' if steer is wide else 'CENTERING'
