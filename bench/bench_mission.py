@@ -8,10 +8,15 @@ per node kind (agents, ual_sim, detectors, central unit, estimator, others), sam
 whole run (_node_cpu.py), and the water efficiency of indoor / facade pours (litres into fires per litre
 pumped at holders of that kind, pooled over the runs, from each summary's `water_efficiency`). Long: about 20/RTF minutes per seed (less when every fire is out early).
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
-    python bench/bench_mission.py --uncertainty realistic --seeds 20     (seeds 101-120, never tuned on)
+    python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3   (seeds 101-120, never tuned on)
+    python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3 --indoor-search explore --gnss-denied-indoors
 The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`). `--uncertainty realistic` runs the
 trial with the real one's uncertainty (ual_sim README, "Uncertainty"), starts at seed 101 unless
---first-seed says otherwise, and writes bench/results/mission_realistic.json.
+--first-seed says otherwise, and writes bench/results/mission_realistic.json. Issue 18's trial:
+`--indoor-search explore` (nothing read of the interior walls or indoor holders) and `--gnss-denied-indoors`
+(no GNSS in the tower, the robots on hector_mapping there: INDOOR_SLAM on); each adds its name to the result
+file's (mission_realistic_explore_gnss_denied.json). Per seed also: indoor fires out, and the indoor flights'
+SLAM pose error against the truth (summary.json `indoor_flights`, referee side).
 """
 from __future__ import annotations
 
@@ -29,9 +34,11 @@ from _node_cpu import KINDS, NodeCpuSampler, per_sim_second
 
 def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     out = os.path.join(out_root, f"seed_{seed}")
+    denied = getattr(args, "gnss_denied_indoors", False)
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
            f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1",
-           f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SLAM={int(getattr(args, 'indoor_slam', False))}"]
+           f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SEARCH={getattr(args, 'indoor_search', 'plan')}",
+           f"GNSS_DENIED_INDOORS={'1' if denied else ''}", f"INDOOR_SLAM={int(denied or getattr(args, 'indoor_slam', False))}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sampler = NodeCpuSampler(proc.pid).start()
@@ -47,7 +54,20 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     s["cpu_s"] = sampler.cpu_by_kind()
     s["cpu_s_per_sim_s"] = per_sim_second(s["cpu_s"], s.get("sim_time_s") or 0.0)
     s["load_average_end"] = load_averages()
+    indoor = [f for f in s.get("fires", []) if f.get("kind") == "indoor"]
+    s["indoor_out"] = sum(1 for f in indoor if f.get("progress", 0.0) >= 1.0)
+    s["indoor_total"] = len(indoor)
+    s["slam_error_m"] = slam_error(s.get("indoor_flights") or [])
     return s
+
+
+def slam_error(flights: list) -> dict | None:
+    """Worst RMS and max of the indoor flights' SLAM pose error against the truth (None without a scored flight)."""
+    scored = [f for f in flights if f.get("rms_error_m") is not None]
+    if not scored:
+        return None
+    return {"flights": len(scored), "worst_rms_m": max(f["rms_error_m"] for f in scored),
+            "max_m": max(f["max_error_m"] for f in scored)}
 
 
 def mean_cpu_per_sim_s(runs: list) -> dict:
@@ -79,6 +99,14 @@ def format_water(eff: dict) -> str:
                      for k, v in eff.items())
 
 
+def result_name(args: argparse.Namespace) -> str:
+    """bench/results file name: mission[_<uncertainty>][_explore][_gnss_denied]."""
+    name = "mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}"
+    if args.indoor_search == "explore":
+        name += "_explore"
+    return name + ("_gnss_denied" if args.gnss_denied_indoors else "")
+
+
 def summarize(runs: list, args: argparse.Namespace) -> dict:
     """The figures over the runs so far (written after every seed, so a cut-short run still reports)."""
     ok = [r for r in runs if "error" not in r]
@@ -102,10 +130,14 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
         "per_seed": [{k: r.get(k) for k in ("seed", "fires_extinguished", "fires_total", "score",
                                             "all_out_time_s", "crashes", "real_time_factor", "end_reason",
                                             "min_separation_m", "sim_time_s", "cpu_s", "cpu_s_per_sim_s",
-                                            "load_average_end", "water_efficiency", "error")} for r in runs],
+                                            "load_average_end", "water_efficiency", "indoor_out", "indoor_total",
+                                            "slam_error_m", "error")} for r in runs],
     }
+    res["indoor_search"], res["gnss_denied_indoors"] = args.indoor_search, args.gnss_denied_indoors
+    res["all_indoor_out_ratio"] = round(sum(1 for r in ok if r.get("indoor_total") and r["indoor_out"] == r["indoor_total"])
+                                        / len(runs), 3) if runs else None
     res["seeds_requested"] = args.seeds
-    write_result("mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}", res, say=False)
+    write_result(result_name(args), res, say=False)
     return res
 
 
@@ -123,6 +155,10 @@ def main() -> int:
     ap.add_argument("--rtf", type=float, default=4.0)
     ap.add_argument("--uavs", type=int, default=3)
     ap.add_argument("--duration", type=float, default=1200.0)
+    ap.add_argument("--indoor-search", choices=("plan", "explore"), default="plan",
+                    help="explore: the robots search indoors on their laser, nothing read of the interior (issue 18)")
+    ap.add_argument("--gnss-denied-indoors", action="store_true",
+                    help="no GNSS inside buildings; the robots fly there on hector_mapping (INDOOR_SLAM on)")
     ap.add_argument("--runs-dir", default=None,
                     help="where each trial's folder (summary, report, logs) goes")
     args = ap.parse_args()
@@ -138,7 +174,8 @@ def main() -> int:
         else:
             print(f"seed {seed}: {s['fires_extinguished']}/{s['fires_total']} out, score {s['score']}, "
                   f"all out at {s.get('all_out_time_s')} s, crashes {s['crashes'] or 'none'}, "
-                  f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m", flush=True)
+                  f"rtf {s['real_time_factor']}, min separation {s.get('min_separation_m')} m, "
+                  f"indoor {s['indoor_out']}/{s['indoor_total']}, SLAM error {s['slam_error_m']}", flush=True)
             print(f"  CPU-s per sim-s: {format_cpu(s['cpu_s_per_sim_s'])} (load {s['load_average_end']})",
                   flush=True)
             print(f"  water into fires per litre pumped: {format_water(water_efficiency([s]))}", flush=True)
