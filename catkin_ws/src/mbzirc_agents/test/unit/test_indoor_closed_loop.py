@@ -57,3 +57,16 @@ def test_a_top_up_finds_a_faint_fire_by_its_ring_of_flames(top_ups):
     good = [p for p, o in zip(TOP_UPS, top_ups) if o['extinguished'] and o['progress'] >= 1.0]
     detail = [(p, round(o['progress'], 3), o['message'][:60]) for p, o in zip(TOP_UPS, top_ups)]
     assert len(good) >= 4, detail
+
+
+@pytest.mark.parametrize('seed', [1, 2, 7])
+def test_ideal_7_a_top_up_whose_looks_outlast_the_pose_history_turns_onto_the_fire_it_saw(seed, monkeypatch):
+    """A top-up of in1_e at 0.943 (out of the detector's reach): the look straight ahead sees its ring of flames,
+    and the looks beside, above and below it take longer than the pose history holds (here 2 s of poses; in
+    the mission 200 poses of ual_sim's 30 Hz, against ~10 s of looks). The ring's bearing must be taken with
+    the pose of its own frame, not with the oldest pose left in the history (a look's 29 deg aside: ideal
+    seed 7 at RTF 4, five tanks 0.6 m beside the fire, left at 0.943): the fire is filled."""
+    from mbzirc_agents import constants as C
+    monkeypatch.setattr(C, 'POSE_HISTORY_LEN', 40)
+    r = pour(seed, holder='in1_e', profile_name='ideal', progress=0.943)
+    assert r['progress'] >= 1.0, (r['message'], r['into'])
