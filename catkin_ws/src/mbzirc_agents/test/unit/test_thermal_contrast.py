@@ -149,11 +149,11 @@ def _rendered_frame(pos, yaw_deg, progress, seed=117):
     from ual_sim.sim import Simulation
     from ual_sim.uncertainty import profile
     from ual_sim.world import load_world
+    from sim_ual import indoor_fire
     world = load_world()
     sim = Simulation(world, seed=seed, uncertainty=profile(world.uncertainty, 'realistic'))
-    for f in sim.fires.fires:
-        if f.holder.id == 'in1_w':
-            f.active, f.litres = True, progress * f.litres_needed
+    fire = sim.fires.fires[indoor_fire(sim, 'in1_w')]
+    fire.litres = progress * fire.litres_needed
     r = next(r for r in sim.robots.values() if r.is_uav and r.water > 0)
     r.state = 3
     r.pos, r.yaw = np.array(pos, dtype=float), math.radians(yaw_deg)
@@ -165,7 +165,7 @@ def _rendered_frame(pos, yaw_deg, progress, seed=117):
 def test_realistic_117_a_warm_wall_beside_a_windows_cold_sky_is_no_ring_of_flames(y, seed):
     """From a watering pose 0.5-1.1 m beside in1_w, a look 30 deg away from it sees the interior wall warm over
     facade B's window (the cold sky): the noise pixels it encloses are no hole, so no ring is taken there
-    (the mission's seed 117 left in1_w at 0.92 that way; the renderer's draws of seed 3 show it here)."""
+    (found while looking into seed 117's miss at in1_w; the renderer's draws of seed 3 show it here)."""
     from mbzirc_agents.tasks.thermal_contrast import pixel_bearing, ringed_spot
     for yaw in (-45, -30, -20):
         found = ringed_spot(_rendered_frame((16.2, y, 6.65), yaw, 0.915, seed), 4.0)

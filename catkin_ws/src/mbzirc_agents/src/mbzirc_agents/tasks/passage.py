@@ -46,6 +46,7 @@ from mbzirc_arena.yaw import wrap_angle
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
+from ..leg_guard import is_blind, malformed
 from ..openings import SeenOpening, find_opening, find_openings, side_clearances
 from .uav_motion import facade_room, hold_box, off_the_facades
 
@@ -157,12 +158,11 @@ class LaserPassage:
     def _on_scan(self, msg: LaserScan) -> None:
         """Keep the latest usable scan; a malformed one is reported and ignored, an all-NaN one is blind."""
         be = self.agent.backend
-        if (not msg.ranges or not math.isfinite(msg.angle_min) or not math.isfinite(msg.angle_increment)
-                or msg.angle_increment <= 0):
+        if malformed(msg):
             be.logerr_throttle(5.0, 'scan: empty or bad angles, ignored')
             return
         now = be.now()
-        if np.isnan(np.asarray(msg.ranges, dtype=float)).all():
+        if is_blind(msg.ranges):
             be.logerr_throttle(5.0, 'scan: every beam NaN (laser blind): holding')
             self._blind_since = now if self._blind_since is None else self._blind_since
             return

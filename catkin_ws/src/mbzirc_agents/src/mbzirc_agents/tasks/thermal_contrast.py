@@ -213,20 +213,21 @@ def largest_component(mask: np.ndarray) -> np.ndarray:
     return best
 
 
-def ring_hole(core: np.ndarray, frame: Optional[np.ndarray] = None, min_rise: float = 0.0) -> np.ndarray:
-    """The hole a warm core rings: the largest 4-connected area it encloses (`enclosed`), at least 3 pixels
-    across (a pixel of it whose four neighbours are in it too), and, given the frame, only when that area reads
-    cooler than the core pixels around it by RING_STEP_SHARE of their rise over the frame's cool part
-    (LOW_PERCENTILE) and by RING_MIN_STEP x min_rise (the rise asked of the ring); else empty.
-    Why: a holder's hole is one area, tens of pixels from the watering distance, cooler than its flames by far
-    more than the camera's noise (a fire at 97 %: 2 degC over its wall inside a ring 6 degC over it), while the
-    noise dips single pixels and thin lines of them. With the cold sky of a window in the view, a whole wall
-    stands as the frame's warm core and its noise pixels under the core's threshold are enclosed by it:
-    realistic seed 117 at RTF 3 on 10ecdfa, a top-up of in1_w at 0.92 turned 23 deg onto such a "ring of
-    flames" (facade B's window beside the interior wall, ual_sim's renderer from there) and poured its tank
-    beside the fire, none in; closed loop pours (bench_indoor_pour.py) seeds 7, 8, 11 at in1_w / in2_w, the fire
-    out: such a "ring" beside the watering pose kept it from being judged out."""
-    hole = largest_component(enclosed(core))
+def ring_hole(core: np.ndarray, inside: np.ndarray, frame: Optional[np.ndarray] = None,
+              min_rise: float = 0.0) -> np.ndarray:
+    """The hole a warm core rings, from the area it encloses (`inside`: `enclosed(core)`): its largest
+    4-connected part, at least 3 pixels across (a pixel of it whose four neighbours are in it too), and, given the
+    frame, only when that part reads cooler than the core pixels around it by RING_STEP_SHARE of their rise
+    over the frame's cool part (LOW_PERCENTILE) and by RING_MIN_STEP x min_rise (the rise asked of the ring);
+    else empty. Why: a holder's hole is one area, tens of pixels from the watering distance, cooler than its
+    flames by far more than the camera's noise (a fire at 97 %: 2 degC over its wall inside a ring 6 degC over
+    it), while the noise dips single pixels and thin lines of them. With the cold sky of a window in the view, a
+    whole wall stands as the frame's warm core and its noise pixels under the core's threshold are enclosed by
+    it: ual_sim's renderer beside in1_w, a look towards facade B's window (looked at for realistic seed 117,
+    whose misses had another cause: the look-around's pose, tasks/indoor.py `_looks`); closed loop pours
+    (bench_indoor_pour.py) seeds 7, 8, 11 at in1_w / in2_w, the fire out: such a "ring" beside the watering
+    pose kept it from being judged out."""
+    hole = largest_component(inside)
     if not (hole[1:-1, 1:-1] & hole[:-2, 1:-1] & hole[2:, 1:-1] & hole[1:-1, :-2] & hole[1:-1, 2:]).any():
         return np.zeros_like(hole)
     if frame is None:
@@ -244,10 +245,11 @@ def ring_hole(core: np.ndarray, frame: Optional[np.ndarray] = None, min_rise: fl
 def spot_of(core: np.ndarray, frame: Optional[np.ndarray] = None, min_rise: float = 0.0) -> Spot:
     """The fire's centre for its warm core (`warm_spot`'s rule); `frame`, when given, tells a hole from noise
     (`ring_hole`, the core asked to stand min_rise over its wall)."""
-    hole = ring_hole(core, frame, min_rise)
+    inside = enclosed(core)
+    hole = ring_hole(core, inside, frame, min_rise)
     clipped = core[0, :].any() or core[-1, :].any() or core[:, 0].any() or core[:, -1].any()
     ringed = bool(hole.any() and hole.sum() <= MAX_HOLE_SHARE * hole.size)
-    rows, cols = np.nonzero(hole if clipped and ringed else core | enclosed(core))
+    rows, cols = np.nonzero(hole if clipped and ringed else core | inside)
     return Spot(float(cols.mean()), float(rows.mean()), bool(ringed or not clipped), ringed)
 
 
