@@ -106,6 +106,9 @@ def test_nothing_left_to_explore_is_none_and_bad_bounds_are_refused():
     walls = [(11.4, 6.7, 24.2, 6.9), (11.4, 19.3, 24.2, 19.5), (11.4, 6.7, 11.6, 19.5), (24.0, 6.7, 24.2, 19.5)]
     grid, visited = explore(walls, (17.8, 13.1))
     assert next_viewpoint(grid, visited[-1], 0.8) is None
+    # what the operator reads then: the grid's counts and where the robot stands
+    said = grid.summary(visited[-1], 0.8)
+    assert f'{int((grid.cells == FREE).sum())} cells free' in said and 'from the outline' in said, said
     with pytest.raises(ValueError):
         FloorGrid((1.0, 1.0, 0.0, 2.0))
     assert next_viewpoint(grid, (0.0, 0.0), 0.8) is None               # outside the footprint
@@ -214,6 +217,31 @@ def test_viewpoints_keep_off_the_outline_where_the_laser_looks_out_through_a_win
     assert len(visited) > 1 and min(outline_distance(v) for v in visited) >= 1.75 - 1e-6, visited
     # kept off the outline, the room's west wall (3.9 m from the first look) still comes within view range
     assert min(v[0] for v in visited) <= 11.6 + 3.5, visited
+
+
+@pytest.mark.parametrize('shift', [(0.8, 0.0), (0.6, -0.5), (0.0, 0.0)])
+def test_a_uav_whose_pose_moved_nearer_the_facade_still_leaves_for_the_room(shift):
+    """GNSS-denied indoor rostest, facade D's window of floor 1: after the look-around the UAV's pose, handed
+    from GNSS to SLAM, stood ~0.8 m nearer facade D than where it looked from (0.9 m from the outline, its
+    facade room 1.75 m): no cell around it kept the room, 'no frontier left' after one look, the fire on
+    the room's far wall 4.8 m away. It leaves through cells no nearer the outline than its own, to a
+    viewpoint that keeps the room; paths elsewhere still keep it."""
+    from laser_world import wall_boxes
+    walls = wall_boxes(6.5) + PLAN_A                   # facade D's window open at the laser's height
+    looked = (22.4, 14.5)
+    grid = FloorGrid(OUTLINE, 0.25)
+    grid.add_scan(looked, scan_points(looked, walls))
+    here = (looked[0] + shift[0], looked[1] + shift[1])
+    legs = next_viewpoint(grid, here, 0.8, 3, (), looked, [looked], 3.5, pass_clearance=0.6,
+                          view_clearance=2.0, outline_clearance=1.75, view_walls=True)
+    assert legs is not None
+    assert outline_distance(legs[-1]) >= 1.75 - 1e-6, legs
+    path = [here] + legs
+    for a, b in zip(path, path[1:]):                   # never nearer the outline than it stood
+        for k in range(21):
+            p = (a[0] + (b[0] - a[0]) * k / 20, a[1] + (b[1] - a[1]) * k / 20)
+            assert outline_distance(p) >= min(1.75, outline_distance(here)) - 0.25, (p, legs)
+        assert not crosses(a, b, walls), (a, b)
 
 
 def test_a_look_around_turns_only_to_walls_in_range_not_yet_looked_at():

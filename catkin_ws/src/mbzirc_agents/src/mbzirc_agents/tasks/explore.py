@@ -134,7 +134,8 @@ class Exploration:
                                   outline_clearance=self.outline_room, view_walls=self.outline_room > 0)
             if legs is None:
                 a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore '
-                                  f'({len(self.looked)} looks, {len(self.skip) // 2} legs blocked)')
+                                  f'({len(self.looked)} looks, {len(self.skip) // 2} legs blocked; '
+                                  f'{self.grid.summary(a.position(), p.explore_clearance)})')
                 break
             if not self.go(legs):
                 continue
