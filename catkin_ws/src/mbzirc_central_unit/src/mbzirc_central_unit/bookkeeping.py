@@ -175,10 +175,15 @@ class Bookkeeping:
         self.pending_ids[agent_id] = (ids, ticks - 1)
         return True
 
-    def autopilot_not_ready(self, a: AgentView) -> bool:
-        """True until the agent's autopilot (UAL) reported a state, e.g. while the simulator starts: a goal
-        now fails at once, and three such failures made the UGV give up its job (seen). Only until its
-        first state: UNINITIALIZED later is the crash state."""
+    def not_ready(self, a: AgentView) -> bool:
+        """True until the agent's autopilot (UAL) reported a state, e.g. while the simulator starts, or while
+        its data_feed has not yet carried a pose: a goal then fails at once, and three such
+        failures made the UGV give up its job (seen), and a water UAV give up refilling for the whole trial
+        (ideal seed 7: three 'go_home_and_refill -> home unknown (no pose yet)' at 2 s, its tank reported
+        empty before the first reading; 0.56 L left after its first fire, it hovered idle for 640 s). Only
+        until its first state: UNINITIALIZED later is the crash state."""
+        if not a.reported:
+            return True
         if a.ual_state != C.UAL_UNINITIALIZED:
             self.seen_ready.add(a.agent_id)
             return False

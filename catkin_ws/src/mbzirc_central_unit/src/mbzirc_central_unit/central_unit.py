@@ -184,7 +184,7 @@ class CentralUnit:
         xyz = feed_position(msg)
         now = rospy.get_time()
         with self.lock:
-            a = self.agents.get(agent_id) or AgentView(agent_id)
+            a = self.agents.get(agent_id) or AgentView(agent_id, reported=False)
             a.last_seen = now
             if xyz is not None:
                 a.x, a.y, a.z = xyz
@@ -199,6 +199,7 @@ class CentralUnit:
             a.battery = msg.battery if _finite(msg.battery) else a.battery
             a.water_level = msg.water_level if _finite(msg.water_level) else 0.0
             a.has_blanket = msg.has_blanket
+            a.reported = a.reported or xyz is not None
             self.agents[agent_id] = a
 
     def _on_objects(self, msg: cmsg.ObjectList) -> None:

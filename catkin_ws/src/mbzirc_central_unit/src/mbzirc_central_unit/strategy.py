@@ -138,7 +138,7 @@ class Strategy:
                 continue
             if self.book.waiting_for_reported_fires(agent_id, world) or self.book.broken(agent_id):
                 continue
-            if self.book.autopilot_not_ready(a):
+            if self.book.not_ready(a):
                 continue
             if not a.is_uav:
                 cmd = self.ugv.decide(a, world)

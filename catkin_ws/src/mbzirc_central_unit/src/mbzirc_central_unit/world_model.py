@@ -36,6 +36,9 @@ class AgentView:
     water_level: float = 0.0
     has_blanket: bool = False
     last_seen: float = -math.inf
+    # the data_feed has carried a pose once: at start-up an agent publishes before its UAL's first pose
+    # (mbzirc_arena.messages.feed_position; the central unit's AgentView starts False)
+    reported: bool = True
 
     @property
     def position(self) -> tuple[float, float, float]:

@@ -480,6 +480,20 @@ def test_no_goal_before_the_robot_s_autopilot_reported():
     assert cmd.agent_id == "0" and cmd.task == C.SEARCH_INDOOR
 
 
+def test_no_goal_before_the_robot_s_data_feed_carried_a_pose():
+    """Ideal seed 7: a water UAV's first data_feeds (UAL ready, no pose yet, water 0) got three refills at
+    2 s, each aborted 'home unknown (no pose yet)'; with three failures it gave refilling up, and after its
+    first fire (0.56 L left) it hovered idle for the last 640 s of the trial. No goal before a pose."""
+    s = Strategy()
+    uav = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 0.0, 0.0, 0.0, ual_state=C.UAL_LANDED_ARMED,
+                    water_level=0.0, last_seen=0.0, reported=False)
+    for t in (0.0, 0.5, 1.0):
+        assert s.decide(WorldView(t, {"2": uav}, {})) == []
+    uav.x, uav.y, uav.reported = 0.0, 8.0, True
+    (cmd,) = s.decide(WorldView(1.5, {"2": uav}, {}))
+    assert cmd.agent_id == "2"
+
+
 def test_a_transit_starting_near_the_ground_climbs_first():
     s = Strategy()
     a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,
