@@ -77,6 +77,9 @@ COLD_CHECKS = 6                 # consecutive cold answers (0.5 s apart) -> fire
 #                                 on the hole meanwhile (a nearly quenched heater reads cold while its container
 #                                 still misses some 8 %: fires left at 92-96 % after 3 checks). Indoors the soak
 #                                 gives that margin and the pump is off while they are counted (tasks/indoor.py)
+# keeping off the walls with no trusted pose (robot_agent._keep_off_walls_without_pose): a slow, damped move
+BLIND_BACK_OFF_GAIN = 1.0       # 1/s: velocity per metre still to go
+BLIND_BACK_OFF_SPEED = 0.3      # m/s at most
 SCAN_MAX_AGE = 0.5              # s: an older laser scan does not clamp (keep_off_walls still does)
 HOLE_DEMAND_TOPIC = 'circle_detection/middle_hole'   # subscribed while a task needs holes (lazy detector)
 

@@ -18,10 +18,11 @@ from mbzirc_comm_objs.msg import AgentDataFeed, ObjectList
 from mbzirc_comm_objs.srv import (AskForRegion, AskForRegionRequest, AskForRegionResponse, CheckFire, FreeRegions,
                                   FreeRegionsRequest, GetCostToGoTo, GetCostToGoToResponse, SetObjectStatus,
                                   SetObjectStatusRequest)
-from sensor_msgs.msg import NavSatStatus
+from sensor_msgs.msg import LaserScan, NavSatStatus
 from std_msgs.msg import Bool, Float32, Header, String
 from mbzirc_arena.boxes import Box, box_text, boxes_overlap, check_point, make_box
 from mbzirc_arena.c3 import ARENA
+from mbzirc_arena.laser import scan_points
 from mbzirc_ros_utils.liveness import HeartbeatFilter
 from mbzirc_arena.yaw import quaternion_from_yaw, wrap_angle, yaw_from_quaternion
 from std_srvs.srv import Trigger, TriggerResponse
@@ -32,10 +33,12 @@ from . import constants as C
 from . import heartbeat as hb
 from .agent import Agent
 from .agent_task import AgentTask, MoveTimedOut, TaskError, TaskPreempted
+from .leg_guard import malformed
 from .params import AgentParams
 from .pose_source import NONE, PoseSource
 from .pose_error_boxes import grown, pose_error_pad
 from .region_yield import STEP_LABEL, step_aside_moves
+from .wall_clearance import away_velocity
 
 
 # m: a held go-to set-point is sent to the UAL again once the UAL-to-arena offset moved this far since it was
@@ -108,6 +111,9 @@ class RobotAgent(Agent):
         ifc.add_subscriber(None, 'actuators_system/blanket_attached', Bool, self._on_blanket)
         ifc.add_subscriber(None, '/estimated_objects', ObjectList, self._on_objects)
         ifc.add_subscriber(None, C.HEARTBEAT_TOPIC, Header, self._on_heartbeat)
+        self._scan: Optional[tuple] = None      # (LaserScan, receive time): keeping off walls without a pose
+        self._backing_off_blind = False          # moving off a wall by the laser with no trusted pose
+        ifc.add_subscriber(None, 'scan', LaserScan, self._on_scan)
         self.feed_pub = ifc.add_publisher('data_feed', AgentDataFeed)
         self.vel_pub = ifc.add_publisher('ual/set_velocity', TwistStamped)
         self.go_to_srv = ifc.add_client('ual/go_to_waypoint', GoToWaypoint)
@@ -208,6 +214,10 @@ class RobotAgent(Agent):
         out.pose.orientation = msg.pose.orientation
         out.pose.position.x, out.pose.position.y, out.pose.position.z = x, y, msg.pose.position.z
         return out
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        if not malformed(msg):                   # the tasks' own laser views report bad scans
+            self._scan = (msg, self.backend.now())
 
     def _on_gnss_status(self, msg: NavSatStatus) -> None:
         with self.state_lock:
@@ -858,7 +868,8 @@ class RobotAgent(Agent):
     def idle(self) -> None:
         """While idle and landed, keep a 'parked' box so that no other UAV flies low over this one, and nothing
         else; while idle and hovering, step aside when the region manager asked (a robot waits long for our
-        hold)."""
+        hold); while idle with no trusted pose, keep off the walls by the laser."""
+        self._keep_off_walls_without_pose()
         if self.ROBOT_TYPE != 'uav' or not self.p.use_regions:
             return
         self._idle_step_aside()
@@ -876,6 +887,35 @@ class RobotAgent(Agent):
         # up to parked_height above the ground it stands on, not above its reported (GNSS) height
         box = ((p[0] - h, p[1] - h, self.arena[2]), (p[0] + h, p[1] + h, self.arena[2] + self.p.parked_height))
         self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
+
+    def _keep_off_walls_without_pose(self) -> None:
+        """Idle, moving (a flying UAV, a UGV) and with no trusted pose (pose source none): off the walls the
+        latest fresh scan shows nearer than ~min_wall_clearance, by velocity (wall_clearance.away_velocity:
+        the returns about the robot and the compass's yaw, no position), then a hold. Why: a task that failed
+        for want of a pose leaves the robot holding on the UAL's own pose, which indoors dead-reckons and
+        drifts; a UAV held in a room that way hit the building 142 s later (realistic seed 105 with no GNSS
+        indoors, mbzirc_launchers README). The central unit's next goals fail at once until a pose returns."""
+        if self.pose_source.valid or not self.p.wall_clearance or not self.is_moving_state() or self.pose is None:
+            self._backing_off_blind = False
+            return
+        scan = self._scan
+        if scan is None or self.backend.now() - scan[1] > C.SCAN_MAX_AGE:
+            return
+        msg = scan[0]
+        points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, (0.0, 0.0, 0.0, float(self.pose[3])),
+                             msg.range_min, msg.range_max if msg.range_max > 0 else math.inf, keep_near=True)
+        v = away_velocity(points, self.p.min_wall_clearance, self.p.wall_clearance_margin,
+                          C.BLIND_BACK_OFF_GAIN, C.BLIND_BACK_OFF_SPEED)
+        if v is None:
+            if self._backing_off_blind:
+                self.send_velocity((0.0, 0.0, 0.0))      # off the wall: hold there
+                self._backing_off_blind = False
+            return
+        if not self._backing_off_blind:
+            self.backend.logwarn(f'no trusted pose ({self.pose_source.why}): a wall nearer than '
+                                 f'{self.p.min_wall_clearance:.2f} m by the laser: moving off it')
+        self._backing_off_blind = True
+        self.send_velocity((float(v[0]), float(v[1]), 0.0))
 
     def _free_the_boxes_of_flight(self) -> None:
         """A landed idle UAV frees every box but its parked one. Why (realistic seed 102): a landing preempted

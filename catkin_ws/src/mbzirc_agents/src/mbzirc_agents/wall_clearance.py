@@ -13,7 +13,9 @@ Rules:
 - while holding, a robot whose nearest returns are nearer than `min_clearance` backs off away from them
   (from the mean of the returns within that distance) to `min_clearance + margin`: the margin is the
   hysteresis, so that a set-point is not re-sent for noise;
-- at least leg_guard.MIN_BEAMS returns make a wall (one stray return moves nothing).
+- at least leg_guard.MIN_BEAMS returns make a wall (one stray return moves nothing);
+- without a trusted pose (pose source none: no GNSS fix, no valid localization) the same back-off is flown
+  as a velocity (`away_velocity`): it needs the returns about the robot only, not where it is.
 Pure geometry here (no ROS); the task's use of it is in tasks/indoor.py.
 """
 from __future__ import annotations
@@ -80,4 +82,19 @@ def off_the_walls(points: Optional[np.ndarray], here: Sequence[float], min_clear
     return (float(here[0] + off[0]), float(here[1] + off[1]), float(here[2]))
 
 
-__all__ = ['back_off', 'off_the_walls', 'stop_short', 'wall_ahead']
+def away_velocity(points: Optional[np.ndarray], min_clearance: float, margin: float, gain: float,
+                  speed: float) -> Optional[np.ndarray]:
+    """Horizontal velocity (vx, vy) that moves a robot off walls nearer than min_clearance, from its laser
+    returns relative to it (points: x, y about the robot, level, arena-aligned: no position needed): along
+    back_off's offset, gain (1/s) times its length, at most speed; None when the walls keep min_clearance
+    (or without a scan)."""
+    if points is None:
+        return None
+    off = back_off(points, (0.0, 0.0), min_clearance, margin)
+    if off is None:
+        return None
+    length = float(np.hypot(off[0], off[1]))
+    return off / max(length, 1e-9) * min(speed, gain * length)
+
+
+__all__ = ['away_velocity', 'back_off', 'off_the_walls', 'stop_short', 'wall_ahead']

@@ -243,3 +243,41 @@ def test_no_trusted_pose_holds_and_fails_the_task_with_why(uav):
     assert agent.pose_source.source == SLAM
     _, outcome = go_to(be, stopped_at[0] - 2.0, 0.0, 3.0)
     assert outcome == 'succeeded'
+
+
+def test_with_no_trusted_pose_an_idle_robot_keeps_off_the_walls_by_the_laser(uav):
+    """Realistic seed 105 with no GNSS indoors (mbzirc_launchers README): a UAV whose pose source went none
+    held in the room on the UAL's dead reckoning and hit the building 142 s later. Idle and without a pose,
+    it moves off the walls its laser sees nearer than ~min_wall_clearance (1 m), whatever drifts it there."""
+    from laser_world import LaserScene
+    agent, ual, be, scenes = uav
+    ual.follow_velocity = True
+    wall = (1.5, -6.0, 1.7, 6.0)                         # a wall face at x = 1.5, the UAV at x = 0
+    scene = LaserScene(be, ual, noisy=True)
+    scene.boxes = [wall]
+    scenes.append(scene)
+    loc = Localization(be, ual)
+    scenes.append(loc)
+    be.clock.sleep(1.0)
+    assert agent.pose_source.source == SLAM
+    loc.on = False
+    be.clock.sleep(2.0)
+    assert not agent.pose_source.valid
+    state = {'stop': False, 'nearest': 9.0}
+
+    def drift():                                         # the dead-reckoned hold creeps towards the wall
+        step = np.array([0.004, 0.0, 0.0])
+        while not state['stop']:
+            with ual.lock:
+                if ual.goal is None:                     # free (after velocity commands): it moves
+                    ual.pos = ual.pos + step
+                else:                                    # holding a position: its frame drifts
+                    ual.gnss_bias = ual.gnss_bias - step
+                state['nearest'] = min(state['nearest'], wall[0] - ual.pos[0])
+            be.clock.sleep(0.1)
+    be.clock.start_thread(drift, name='drift')
+    be.clock.sleep(40.0)                                 # 1.6 m of creep: into the wall without the laser
+    state['stop'] = True
+    assert state['nearest'] >= 0.8, state['nearest']     # never nearer than the clearance, less its noise
+    assert any('moving off it' in m for m in be.warns), (be.warns[-5:], ual.pos)
+    assert wall[0] - ual.pos[0] < 1.6                    # and nothing more: it holds near the clearance
