@@ -229,7 +229,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
                    skip: Iterable = (), sight_of: Optional[Sequence[float]] = None,
                    viewed: Sequence = (), view_range: float = 0.0, pass_clearance: Optional[float] = None,
                    view_clearance: float = 0.0, outline_clearance: float = 0.0,
-                   view_walls: bool = False) -> Optional[list]:
+                   view_walls: bool = False, min_move: float = 0.0, reached: Iterable = ()) -> Optional[list]:
     """The legs [(x, y), ...] to the next viewpoint, or None when no frontier is reachable.
 
     The viewpoint is a frontier's cell (or, with viewed and view_range > 0, a standable cell farther than
@@ -246,7 +246,11 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). view_walls
     (with view_range): cells near laser returns farther than view_range from every viewed point are
     viewpoints too (near_unviewed_walls): kept off the outline, the standable cells beyond view_range no
-    longer bring the camera near the outer walls."""
+    longer bring the camera near the outer walls. min_move: no viewpoint nearer than this to here (a robot
+    there already, by its arrival tolerance, would not move and see the same again: the on-demand
+    ugv_gnss_denied rostest, a frontier cell 0.2 m from the UGV chosen 100 times in 100 s); reached: (x, y)
+    viewpoints gone to before, not chosen again (a frontier the laser cannot resolve from there: a cell it
+    never sees, beside or under the robot), still passed."""
     start = grid.cell(here[0], here[1])
     if start is None:
         return None
@@ -278,8 +282,10 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
         if view_walls:
             targets += near_unviewed_walls(grid, passable, viewed, view_range)
     best = None
+    done = {grid.cell(p[0], p[1]) for p in reached} - {None}
     for c in set(targets):
-        if c not in parent or c in banned or c == start:
+        if c not in parent or c in banned or c in done or c == start \
+                or math.dist(grid.centre(c), here[:2]) < min_move:
             continue
         if origin is not None and not grid.line_free(in_sight, origin, c):
             continue

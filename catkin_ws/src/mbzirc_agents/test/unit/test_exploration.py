@@ -244,6 +244,26 @@ def test_a_uav_whose_pose_moved_nearer_the_facade_still_leaves_for_the_room(shif
         assert not crosses(a, b, walls), (a, b)
 
 
+def test_a_viewpoint_within_the_arrival_tolerance_or_gone_to_before_is_not_chosen():
+    """On-demand ugv_gnss_denied rostest: just inside its door the UGV chose a frontier cell 0.2 m from where
+    its pose said it stood, arrived at once (within its 0.2 m tolerance), saw nothing new, and chose it again,
+    100 times in 100 s, the fire unsearched. A viewpoint nearer than min_move is not chosen, nor one in
+    `reached` (gone to before); the search goes on elsewhere."""
+    walls = outer_walls() + PLAN_A
+    grid = FloorGrid(OUTLINE, 0.25)
+    here = (14.3, 9.0)
+    grid.add_scan(here, scan_points(here, walls))
+    grid.cells[grid.cell(14.3, 8.8)] = FREE              # a frontier cell beside the robot that it never resolves
+    grid.cells[grid.cell(14.3, 8.55)] = UNKNOWN
+    kw = dict(pass_clearance=0.6)
+    first = next_viewpoint(grid, here, 0.6, 1, (), None, [here], 0.0, **kw)
+    assert first is not None and math.dist(first[-1], here) < 0.3, first     # the trap: right beside it
+    moved = next_viewpoint(grid, here, 0.6, 1, (), None, [here], 0.0, min_move=0.3, **kw)
+    assert moved is not None and math.dist(moved[-1], here) >= 0.3, moved
+    again = next_viewpoint(grid, here, 0.6, 1, (), None, [here], 0.0, reached=[first[-1]], **kw)
+    assert again is not None and grid.cell(*again[-1]) != grid.cell(*first[-1]), again
+
+
 def test_a_look_around_turns_only_to_walls_in_range_not_yet_looked_at():
     """Ideal seed 3 with exploration: at every viewpoint the UAV turned through 12 headings of its 33 deg
     thermal camera (35-50 s), at viewpoints 0.2-0.5 m apart that looked at the same walls again. A look

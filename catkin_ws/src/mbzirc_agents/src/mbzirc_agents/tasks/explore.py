@@ -12,6 +12,7 @@ Rules:
   from where the leg guard stopped a leg of the path inside a building;
 - the next viewpoint is a frontier of the laser's free space, or free space farther than
   ~explore_view_range from everywhere the robot looked around from (the thermal camera sees less far);
+  never one gone to before, nor one within ~position_tolerance of the robot (it would not move);
 - a UAV explores at the height fires are expected at (EXPECTED_FIRE_HEIGHT above the floor, from the
   public facade holders), going down to it first; its way back ends at that height;
 - at every viewpoint (the search path's last waypoint first) the robot turns on the spot to the fewest
@@ -106,6 +107,7 @@ class Exploration:
         self.z = ARENA.floor_heights[floor] + EXPECTED_FIRE_HEIGHT if uav else self.start[2]
         self.visited: list = [self.start]
         self.skip: list = []
+        self.reached: list = []      # viewpoints gone to: not chosen again
         self.looked: list = []       # where it looked around from
         self.watched = np.zeros_like(self.grid.cells, dtype=bool)   # walls the thermal camera looked at
         self.view_range = self.agent.p.explore_view_range if self.agent.p.explore_view_range > 0 else math.inf
@@ -131,7 +133,8 @@ class Exploration:
             legs = next_viewpoint(self.grid, a.position(), p.explore_clearance, p.explore_min_frontier,
                                   self.skip, sight, self.looked, p.explore_view_range,
                                   pass_clearance=p.explore_pass_clearance, view_clearance=p.explore_view_clearance,
-                                  outline_clearance=self.outline_room, view_walls=self.outline_room > 0)
+                                  outline_clearance=self.outline_room, view_walls=self.outline_room > 0,
+                                  min_move=p.position_tolerance, reached=self.reached)
             if legs is None:
                 a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore '
                                   f'({len(self.looked)} looks, {len(self.skip) // 2} legs blocked; '
@@ -139,6 +142,7 @@ class Exploration:
                 break
             if not self.go(legs):
                 continue
+            self.reached.append(legs[-1])
         if not found:
             self.go_back()
         return found
