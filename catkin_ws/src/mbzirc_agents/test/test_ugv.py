@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """rostest with ual_sim: the UGV agent's bad goals, its planned go_to and search_indoor through the door, and
-extinguish_indoor_fire putting out the ground-floor fire it found."""
+extinguish_indoor_fire putting out the ground-floor fire it found. `~gnss_denied` (realistic/ugv_gnss_denied.test):
+inside, the drive must have been on the SLAM pose (localization/source 'slam' while ual/gnss_status said there
+was no fix)."""
 import math
 import unittest
 
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
+from sensor_msgs.msg import NavSatStatus
+from std_msgs.msg import String
 from agent_test_utils import SimRobots, pose, run, wait_wall
 from mbzirc_comm_objs.msg import ObjectList
 from ual_sim.msg import FireStateArray, Score
@@ -25,6 +29,10 @@ class TestUgv(unittest.TestCase):
         rospy.Subscriber('/sim/score', Score, lambda m: setattr(cls, 'crashed', list(m.crashed_robots)))
         assert wait_wall(lambda: 0 in cls.sim.poses, 60), 'no /sim/robots'
         rospy.Timer(rospy.Duration(0.2), lambda e: cls.trace.append(cls.sim.poses[0]))
+        cls.fix_lost, cls.sources = False, set()
+        rospy.Subscriber('/mbzirc2020_0/ual/gnss_status', NavSatStatus,
+                         lambda m: setattr(cls, 'fix_lost', cls.fix_lost or m.status == NavSatStatus.STATUS_NO_FIX))
+        rospy.Subscriber('/mbzirc2020_0/localization/source', String, lambda m: cls.sources.add(m.data))
 
     def test_1_bad_goals(self):
         state, res = run(0, 'search_indoor', 'SearchIndoor', 30, floor=2)
@@ -38,7 +46,7 @@ class TestUgv(unittest.TestCase):
         self.assertIn('unknown fire id 5', res.message)
 
     def test_2_enters_through_the_door(self):
-        state, res = run(0, 'search_indoor', 'SearchIndoor', 200, floor=0)
+        state, res = run(0, 'search_indoor', 'SearchIndoor', 400, floor=0)
         self.assertEqual(state, GoalStatus.SUCCEEDED, res.message)
         self.__class__.found = list(res.fire_ids)
         self.assertEqual(self.crashed, [])
@@ -76,6 +84,13 @@ class TestUgv(unittest.TestCase):
         active = [f for f in fires if f.kind == 2 and f.floor == 0 and f.active][0]
         self.assertTrue(active.extinguished, f'indoor fire progress {active.progress:.2f}: {res.message}')
         self.assertEqual(self.crashed, [])
+
+    def test_5_drove_inside_on_the_slam_pose(self):
+        """With no GNSS indoors (~gnss_denied), the UAL said so and the agent's pose came from SLAM."""
+        if not rospy.get_param('~gnss_denied', False):
+            self.skipTest('GNSS indoors (ugv.test); realistic/ugv_gnss_denied.test turns it off')
+        self.assertTrue(self.fix_lost, 'the UAL never said it lost the GNSS fix indoors')
+        self.assertIn('slam', self.sources, f'never on the SLAM pose (sources: {sorted(self.sources)})')
 
 
 if __name__ == '__main__':
