@@ -1028,31 +1028,6 @@ def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside
         f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a faint warm area'
 
 
-def test_realistic_108_the_look_around_never_turns_onto_a_warm_wall_cut_by_the_frames_edge(scenes):
-    """Realistic seed 108 (benchmark on d35448b): top-ups of in1_w at 98 % (too faint for the raw image) looked
-    around and turned -44 deg onto the warmest area, 13 degC over its wall: the sun-heated facade B seen past
-    the interior wall's corner, cut by the edge of the look 29 deg aside; 4.6 L went there. A warm area
-    beside the view that reaches across the frame, edge to edge, around no hole is a wall's part, not taken
-    (a fire's core cut by the frame's edge reaches one edge: test_realistic_103_... above). Before: the UAV
-    turned onto it."""
-    sc = scenes(hot_until=0.0)
-    rng = np.random.default_rng(5)
-    yaw0 = []
-    cols = np.arange(fake_thermal.SIZE)
-
-    def frame():                         # everything right of -36 deg from the first heading reads 13 degC warmer
-        if not yaw0:
-            yaw0.append(sc.ual.yaw)
-        bearing = np.arctan((15.5 - cols) / FOCAL) + (sc.ual.yaw - yaw0[0])
-        f = fake_thermal.fire_frame(0.0, rng=rng)
-        f[:, bearing < -0.62] += 13.0
-        return f
-    sc.ual.thermal = frame
-    sc.extinguish(timeout=60)
-    assert yaw0 and abs(math.remainder(sc.ual.yaw - yaw0[0], 2 * math.pi)) < 0.05, \
-        f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a warm wall cut by the frame\'s edge'
-
-
 class DriftsOutOfView:
     """The fire seen hot and watered, then (after `after` s of pumping) out of the camera's view `offset` rad to
     the left, as when the aim frozen on it drifts off: in view it is a ring of flames 25 degC over its wall

@@ -469,11 +469,7 @@ class ExtinguishIndoorFire(AgentTask):
         tank, the fire at 98 % untouched). Why the warmest and not the first: a sun-heated outer wall seen
         from inside stands 5-25 degC over the interior walls, and the first look that showed one took the
         tank (closed loop, bench_indoor_pour.py --track-from 3, seed 12: three whole tanks 1.6 m beside
-        fires that a look 29 deg further showed burning; ual_sim's realistic profile). A warm area (not a ring)
-        that reaches across the frame, edge to edge, around no hole is not taken: a wall's part seen beside
-        the view makes such a band, a fire's core cut by the frame's edge reaches one edge (realistic seed 108 on d35448b: top-ups of
-        in1_w at 98 % turned -44 deg onto the sun-heated facade B seen past the interior wall's corner, 13 degC
-        over its wall at the edge of the look 29 deg aside: 4.6 L there, 3.8 of them short of any wall)."""
+        fires that a look 29 deg further showed burning; ual_sim's realistic profile)."""
         a = self.agent
         z0 = self._held_z(a.position())
         looks = [(0.0, 0.0), (LOOK_TURN, 0.0), (-LOOK_TURN, 0.0)]
@@ -518,8 +514,6 @@ class ExtinguishIndoorFire(AgentTask):
             while a.backend.now() < end:
                 ring = self.contrast.warm_spot(ringed=True)
                 warm = self.contrast.warm_spot(LOOK_MIN_RISE) if warm_too else None
-                if warm is not None and warm.across and not (warm.whole or warm.ringed):
-                    warm = None     # a band across the view, cut by its edges around no hole: a wall's part
                 spot = next((s for s in (ring, warm) if s is not None and s.time > since), None)
                 if spot is not None:
                     break

@@ -148,7 +148,6 @@ class Spot(NamedTuple):
     row: float
     whole: bool     # the centre is the fire's (not a core cut by the frame's edge around no enclosed area)
     ringed: bool    # the warm core encloses a cooler area: a holder's hole in its ring of flames
-    across: bool = False   # the core reaches two opposite edges of the frame: a band across the view
 
 
 class FrameSpot(NamedTuple):
@@ -159,7 +158,6 @@ class FrameSpot(NamedTuple):
     whole: bool
     contrast: float   # deg C over its wall
     ringed: bool
-    across: bool = False
 
 
 def warm_spot(frame: np.ndarray, min_rise: float) -> Optional[Spot]:
@@ -252,8 +250,7 @@ def spot_of(core: np.ndarray, frame: Optional[np.ndarray] = None, min_rise: floa
     clipped = core[0, :].any() or core[-1, :].any() or core[:, 0].any() or core[:, -1].any()
     ringed = bool(hole.any() and hole.sum() <= MAX_HOLE_SHARE * hole.size)
     rows, cols = np.nonzero(hole if clipped and ringed else core | inside)
-    across = (core[0, :].any() and core[-1, :].any()) or (core[:, 0].any() and core[:, -1].any())
-    return Spot(float(cols.mean()), float(rows.mean()), bool(ringed or not clipped), ringed, bool(across))
+    return Spot(float(cols.mean()), float(rows.mean()), bool(ringed or not clipped), ringed)
 
 
 def box_mean(frame: np.ndarray) -> np.ndarray:
@@ -385,7 +382,7 @@ class FireContrast:
             if spot is None:
                 return None
             return FrameSpot(spot.column, spot.row, self.frame_time, spot.whole, contrast(self.frame, masks),
-                             spot.ringed, spot.across)
+                             spot.ringed)
 
     @property
     def locked(self) -> bool:
