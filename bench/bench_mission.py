@@ -62,12 +62,16 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
 
 
 def slam_error(flights: list) -> dict | None:
-    """Worst RMS and max of the indoor flights' SLAM pose error against the truth (None without a scored flight)."""
-    scored = [f for f in flights if f.get("rms_error_m") is not None]
+    """Worst RMS and max of the indoor flights' SLAM pose error against the truth (None without a scored
+    flight): while the robots flew on it (`rms_on_slam_m`) when any did (GNSS denied indoors), else of the
+    watched SLAM pose (`rms_error_m`, GNSS indoors)."""
+    on = [f for f in flights if f.get("rms_on_slam_m") is not None]
+    rms, mx = ("rms_on_slam_m", "max_on_slam_m") if on else ("rms_error_m", "max_error_m")
+    scored = on or [f for f in flights if f.get("rms_error_m") is not None]
     if not scored:
         return None
-    return {"flights": len(scored), "worst_rms_m": max(f["rms_error_m"] for f in scored),
-            "max_m": max(f["max_error_m"] for f in scored)}
+    return {"flights": len(scored), "on_slam": bool(on), "worst_rms_m": max(f[rms] for f in scored),
+            "max_m": max(f[mx] for f in scored)}
 
 
 def mean_cpu_per_sim_s(runs: list) -> dict:

@@ -10,7 +10,10 @@ between the robot's `localization/pose` (published on every SLAM pose once ancho
 and the simulator's true pose, at every true pose of the period (/sim/robots, 2 Hz), the SLAM pose
 interpolated at that time between two poses at most `max_gap` s apart (none: the sample is skipped). Its
 floor is the storey of most of its true heights (rule: `mbzirc_arena.floor_of`); `on_slam_s` says how long
-the source was `slam` during it.
+the source was `slam` during it. `rms_on_slam_m` / `max_on_slam_m` score only the samples while the source was
+`slam`: the pose the robot flew on (with GNSS denied indoors a robot whose source went `none` holds, and the
+SLAM pose it no longer uses may be anywhere: an unanchored map frame read kilometres off, explore + GNSS-denied
+mission, seeds 101-102); None when the source was never `slam` (GNSS indoors: the SLAM pose is only watched).
 """
 from __future__ import annotations
 
@@ -104,26 +107,33 @@ def anchor_from_pair(arena_pose: tuple, map_pose: tuple) -> tuple:
             arena_pose[1] - (s * map_pose[0] + c * map_pose[1]), math.atan2(math.sin(yaw), math.cos(yaw)))
 
 
+def _rms(errors: Sequence[float]) -> Optional[float]:
+    return round(math.sqrt(sum(e * e for e in errors) / len(errors)), 3) if errors else None
+
+
 def flight_summary(robot: str, period: tuple, slam: Sequence[Sample], truth: Sequence[Sample],
-                   floor_of: Callable[[float], int], max_gap: float = MAX_GAP_S, on_slam_s: float = 0.0) -> dict:
+                   floor_of: Callable[[float], int], max_gap: float = MAX_GAP_S, on_slam_s: float = 0.0,
+                   slam_spans: Sequence[tuple] = ()) -> dict:
     """One flight's entry of summary.json: robot, floor, start, end, duration, time on the slam source,
-    SLAM poses, error samples, RMS and max."""
+    SLAM poses, error samples, RMS and max, and RMS and max while on the slam source (`slam_spans`)."""
     t0, t1 = period
     inside = [s for s in slam if t0 <= s[0] <= t1]
     times = [s[0] for s in inside]
-    errors, floors = [], Counter()
+    errors, used, floors = [], [], Counter()
     for t, x, y, z in (s for s in truth if t0 <= s[0] <= t1):
         floors[floor_of(z)] += 1
         est = interpolate_xy(inside, t, max_gap, times)
         if est is not None:
             errors.append(math.hypot(est[0] - x, est[1] - y))
+            if any(a <= t <= b for a, b in slam_spans):
+                used.append(errors[-1])
     if not floors:                       # no truth in the flight: the SLAM pose's own heights say where
         floors.update(floor_of(s[3]) for s in inside)
     return {"robot": robot, "floor": floors.most_common(1)[0][0] if floors else None,
             "t_start": round(t0, 2), "t_end": round(t1, 2), "duration_s": round(t1 - t0, 2),
             "on_slam_s": round(on_slam_s, 2), "slam_poses": len(inside), "samples": len(errors),
-            "rms_error_m": round(math.sqrt(sum(e * e for e in errors) / len(errors)), 3) if errors else None,
-            "max_error_m": round(max(errors), 3) if errors else None}
+            "rms_error_m": _rms(errors), "max_error_m": round(max(errors), 3) if errors else None,
+            "rms_on_slam_m": _rms(used), "max_on_slam_m": round(max(used), 3) if used else None}
 
 
 @dataclass
@@ -177,7 +187,7 @@ class SlamRecord:
             truth = self.truth.get(robot, [])
             for p in joined(on_slam + indoor_periods(truth, self.footprints)):
                 out.append(flight_summary(robot, p, self.poses.get(robot, []), truth, floor_of,
-                                          on_slam_s=_overlap(p, on_slam)))
+                                          on_slam_s=_overlap(p, on_slam), slam_spans=on_slam))
         return sorted(out, key=lambda f: (f["t_start"], f["robot"]))
 
     def map_floors(self, t_end: float, floor_of: Callable[[float], int]) -> dict[str, int]:

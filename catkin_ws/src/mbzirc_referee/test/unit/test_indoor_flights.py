@@ -67,6 +67,20 @@ def test_rms_and_max_see_an_outlier():
     assert f["rms_error_m"] == pytest.approx(math.sqrt(4.0 / f["samples"]), abs=1e-3)
 
 
+def test_the_error_on_slam_counts_only_while_the_robot_flew_on_it():
+    """Explore + GNSS-denied mission, seeds 101-102: a UAV inside whose source went none (held, not flying on
+    the SLAM pose) had a SLAM pose kilometres off (an unanchored map frame), and the flight's error read
+    100 km. The error while on the slam source counts only those samples; without any, None."""
+    slam = _slam(0.0, 10.0, offset=(0.0, 0.0))
+    slam = [(t, x + (5000.0 if t > 5.0 else 0.0), y, z) for t, x, y, z in slam]      # lost after 5 s
+    f = flight_summary("3", (0.0, 10.0), slam, _truth(0.0, 10.0), FLOOR_OF, on_slam_s=5.0,
+                       slam_spans=[(0.0, 5.0)])
+    assert f["max_error_m"] > 1000.0                                  # every sample: the unused pose too
+    assert f["max_on_slam_m"] == pytest.approx(0.0, abs=1e-6) and f["rms_on_slam_m"] == pytest.approx(0.0, abs=1e-6)
+    g = flight_summary("3", (0.0, 10.0), slam, _truth(0.0, 10.0), FLOOR_OF)
+    assert g["rms_on_slam_m"] is None and g["max_on_slam_m"] is None   # never on slam: only watched
+
+
 def test_samples_outside_the_flight_or_without_slam_poses_around_do_not_count():
     slam = [s for s in _slam(0.0, 20.0) if not 4.0 < s[0] < 6.0]           # SLAM silent 4-6 s
     f = flight_summary("2", (2.0, 12.0), slam, _truth(0.0, 30.0), FLOOR_OF)
