@@ -185,6 +185,8 @@ class AgentParams:
                                           'far from its stamp (the offset between the frames)')
     pose_source_grace: float = _param(0.5, 's a pose source of none (no fix, no valid localization) must last '
                                       'before the robot holds and its task fails')
+    anchor_wait: float = _param(30.0, 's (sim) a robot waits at a window or door for the indoor localization '
+                                'to be anchored (its pose heard) before going in, when one runs; then the task fails')
     pose_offset_rate: float = _param(0.5, 'm/s: the UAL-to-arena offset applied follows the measured one at '
                                      'most this fast (no jump of the pose when the source switches)')
     home: List[float] = _param([], 'x, y, z of home; empty: the first pose received', lengths=(0, 3))

@@ -104,6 +104,12 @@ class PoseSource:
         return None
 
     # ---- the rule -----------------------------------------------------------------------------------------
+    def localization_pending(self, now: float) -> bool:
+        """True while an indoor localization runs (its source heard) but its pose is not anchored (none
+        paired within ~localization_timeout): inside, with no GNSS, there would be no trusted pose."""
+        return (self.p.use_localization and self.localization_source != ''
+                and (self.measured is None or now - self.measured[0] > self.p.localization_timeout))
+
     def localization_valid(self, now: float) -> bool:
         return (self.p.use_localization and self.localization_source == LOCALIZATION_VALID
                 and self.measured is not None and now - self.measured[0] <= self.p.localization_timeout)

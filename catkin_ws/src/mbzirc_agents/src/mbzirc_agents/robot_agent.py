@@ -588,6 +588,33 @@ class RobotAgent(Agent):
         if self.ual_state == C.UAL_UNINITIALIZED:
             raise TaskError(f'{what + ": " if what else ""}UAL state is UNINITIALIZED (crashed?)')
 
+    def wait_for_indoor_pose(self, task: AgentTask, what: str) -> None:
+        """Before going in through `what` (a window, the door): while an indoor localization runs and its pose
+        is not anchored yet (pose_source.localization_pending), hold there up to ~anchor_wait s, then fail
+        (TaskError) saying why. Why: with no GNSS indoors a robot that goes in before its SLAM pose is
+        anchored has no trusted pose inside (source none) and every goal there fails at once (explore +
+        GNSS-denied mission, seed 101 on 17b1e7b: the UGV through its door 2 s after the start, its SLAM stack
+        lagging at the start-up's load; it stood inside for the whole trial). Without a localization (no
+        `indoor_slam`) nothing waits."""
+        end = self.backend.now() + self.p.anchor_wait
+        said = False
+        while True:
+            with self.state_lock:
+                pending = self.pose_source.localization_pending(self.backend.now())
+            if not pending:
+                if said:
+                    self.backend.loginfo(f'[{task.name}] the indoor localization is anchored: going in')
+                return
+            if self.backend.now() >= end:
+                raise TaskError(f'{what}: the indoor localization is not anchored after '
+                                f'{self.p.anchor_wait:.0f} s: not going in')
+            if not said:
+                self.backend.logwarn(f'[{task.name}] {what}: waiting for the indoor localization to be anchored')
+                said = True
+            task.feedback('WAITING', f'{what}: for the indoor localization to be anchored')
+            task.check_preempt()
+            self.backend.sleep(1.0 / C.CONTROL_RATE_HZ)
+
     def raise_if_lost(self, what: str = '') -> None:
         """TaskError when no pose is trusted (pose source none): the robot holds, the central unit reassigns."""
         if not self.pose_source.valid:
@@ -962,6 +989,7 @@ class IdleStep:
 
     def __init__(self, agent: 'RobotAgent') -> None:
         self.agent = agent
+        self.name = 'idle'
 
     def check_preempt(self) -> None:
         """Never preempted; the state machine's loop still shows it runs (the agent's liveness)."""

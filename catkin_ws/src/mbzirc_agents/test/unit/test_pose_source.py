@@ -281,3 +281,31 @@ def test_with_no_trusted_pose_an_idle_robot_keeps_off_the_walls_by_the_laser(uav
     assert state['nearest'] >= 0.8, state['nearest']     # never nearer than the clearance, less its noise
     assert any('moving off it' in m for m in be.warns), (be.warns[-5:], ual.pos)
     assert wall[0] - ual.pos[0] < 1.6                    # and nothing more: it holds near the clearance
+
+
+def test_a_robot_waits_at_the_entrance_until_the_indoor_localization_is_anchored(uav):
+    """Explore + GNSS-denied mission, seed 101 on 17b1e7b: the UGV went through its door 2 s after the start,
+    before its SLAM pose was anchored (its SLAM stack lagging at the start-up's load); inside, with no GNSS,
+    its pose source was none and every goal failed at once for the whole trial. While a localization runs
+    (its source heard) and no pose of it is heard, the robot holds at the entrance; it goes in once one is,
+    and after ~anchor_wait without one the task fails saying why. Without a localization nothing waits."""
+    from std_msgs.msg import String
+    from mbzirc_agents.agent_task import TaskError
+    from mbzirc_agents.robot_agent import IdleStep
+    agent, ual, be, scenes = uav
+    step = IdleStep(agent)
+    t0 = be.clock.now()
+    agent.wait_for_indoor_pose(step, 'the door')                  # no localization at all: at once
+    assert be.clock.now() - t0 < 0.05
+    be.subs['localization/source'](String('gnss'))               # one runs, not anchored yet
+    t0 = be.clock.now()
+    with pytest.raises(TaskError, match='not anchored after 30 s'):
+        agent.wait_for_indoor_pose(step, 'the door')
+    assert be.clock.now() - t0 >= 30.0 - 1e-6
+    assert any('waiting for the indoor localization' in m for m in be.warns)
+    loc = Localization(be, ual)                                  # its poses come (and the fix is lost)
+    loc.source = 'gnss'
+    scenes.append(loc)
+    t0 = be.clock.now()
+    agent.wait_for_indoor_pose(step, 'the door')
+    assert be.clock.now() - t0 < 1.0

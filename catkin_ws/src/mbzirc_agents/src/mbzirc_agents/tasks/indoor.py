@@ -90,6 +90,7 @@ class EnterBuilding(AgentTask):
         (pos, yaw) = ud.entry
         self.feedback('APPROACHING', f'to the window of floor {ud.floor}')
         self.call_task_or_raise('go_to', {'waypoint': (pos, yaw)})
+        self.agent.wait_for_indoor_pose(self, f'the window of floor {ud.floor}')
         self.feedback('ENTERING', 'through the window')
         self.passage.ahead(yaw, self.agent.p.entry_depth)
         self.result['message'] = f'inside floor {ud.floor}'

@@ -201,6 +201,7 @@ class UgvSearchIndoor(SearchIndoor):
             return self._search(ud.floor, back)
         self.feedback('GOING', 'to the entrance')
         self.call_task_or_raise('go_to', {'waypoint': path[0]})
+        self.agent.wait_for_indoor_pose(self, 'the door')
         ud_path = path[1:] if len(path) > 1 else path
         return self._search(ud.floor, ud_path)
 
