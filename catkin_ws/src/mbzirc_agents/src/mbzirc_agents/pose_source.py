@@ -104,15 +104,18 @@ class PoseSource:
         return None
 
     # ---- the rule -----------------------------------------------------------------------------------------
+    def _localization_fresh(self, now: float) -> bool:
+        """A localization/pose was paired within ~localization_timeout of now."""
+        return self.measured is not None and now - self.measured[0] <= self.p.localization_timeout
+
     def localization_pending(self, now: float) -> bool:
         """True while an indoor localization runs (its source heard) but its pose is not anchored (none
         paired within ~localization_timeout): inside, with no GNSS, there would be no trusted pose."""
-        return (self.p.use_localization and self.localization_source != ''
-                and (self.measured is None or now - self.measured[0] > self.p.localization_timeout))
+        return self.p.use_localization and self.localization_source != '' and not self._localization_fresh(now)
 
     def localization_valid(self, now: float) -> bool:
         return (self.p.use_localization and self.localization_source == LOCALIZATION_VALID
-                and self.measured is not None and now - self.measured[0] <= self.p.localization_timeout)
+                and self._localization_fresh(now))
 
     def update(self, now: float) -> Optional[str]:
         """Apply the rule at time now and move the applied offset; returns the log line of a switch, else

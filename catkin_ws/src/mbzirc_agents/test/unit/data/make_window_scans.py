@@ -27,6 +27,7 @@ import numpy as np
 import rosbag
 import yaml
 from mbzirc_arena.c3 import FOOTPRINTS
+from mbzirc_arena.yaw import yaw_from_quaternion
 
 
 def world_openings(path):
@@ -110,7 +111,7 @@ def main():
                 if topic == '/sim/robots' and len(msg.poses) > index:
                     p = msg.poses[index]
                     q = p.orientation
-                    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+                    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
                     stamp = msg.header.stamp.to_sec() if msg.header.stamp else t.to_sec()
                     truths.append((stamp, p.position.x, p.position.y, p.position.z + laser_z, yaw))
                 elif topic.endswith('/scan'):
