@@ -3,13 +3,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional, Sequence, Tuple
+from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
 
 from fire_detector import constants as C
 from fire_detector.frame_filter import FrameFilter
-from fire_detector.geometry import downward_fire_position, forward_fire_position
+from fire_detector.geometry import downward_fire_position, forward_fire_position, spot_bearing
 from fire_detector.thermal import HotSpot, find_hot_spot, parse_temperatures
 
 Vec3 = Tuple[float, float, float]
@@ -95,14 +95,33 @@ class FireDetector:
             return True
         return laser_range is None or not math.isfinite(laser_range) or laser_range < limit
 
+    def _forward_depth(self, laser_range: float, range_along, spot: HotSpot) -> Optional[float]:
+        """How far ahead (along the camera's axis) the fire is: the laser's range along the spot's bearing
+        projected on the axis, or the front range without range_along. Why (UGV exploring with GNSS off):
+        a fire 15 deg off the axis on a wall seen at a grazing angle, the front beam on a nearer wall, was
+        placed on that wall, 2.8 m from the fire. None: no return along the bearing within
+        ~check_fire_max_range (looking out through a gap: the front wall is not the fire's)."""
+        if range_along is None:
+            return laser_range
+        bearing = spot_bearing(spot.u)
+        r = range_along(bearing)
+        if r is None or not math.isfinite(r) or r >= self.config.check_fire_max_range:
+            return None
+        return r * math.cos(bearing)
+
     def process(
         self,
         temperatures: Sequence[float],
         uav_position: Optional[Vec3],
         uav_yaw: Optional[float],
         laser_range: Optional[float],
+        range_along: Optional[Callable[[float], Optional[float]]] = None,
     ) -> FrameResult:
-        """Processes one raw_temp_array frame; raises ValueError on malformed temperatures."""
+        """Processes one raw_temp_array frame; raises ValueError on malformed temperatures.
+
+        range_along (FORWARD): the laser's range along a bearing (rad, left positive), to place the fire at
+        the range along the spot's bearing instead of the front range (`_forward_depth`); None: the front
+        range, as the original."""
         cfg = self.config
         frame = parse_temperatures(temperatures)
         spot = find_hot_spot(frame, cfg.thermal_threshold, cfg.min_contrast, cfg.saturation_temperature,
@@ -131,8 +150,12 @@ class FireDetector:
             if laser_range >= cfg.check_fire_max_range:
                 result.reason = f"front laser range {laser_range:.2f} m >= {cfg.check_fire_max_range} m"
                 return result
-            pos, rel = forward_fire_position(uav_position, uav_yaw, laser_range, spot.u, spot.v)
-            depth = laser_range
+            depth = self._forward_depth(laser_range, range_along, spot)
+            if depth is None:
+                result.reason = (f"no laser return along the spot's bearing "
+                                 f"({math.degrees(spot_bearing(spot.u)):+.0f} deg)")
+                return result
+            pos, rel = forward_fire_position(uav_position, uav_yaw, depth, spot.u, spot.v)
         else:
             pos, rel = downward_fire_position(uav_position, uav_yaw, spot.u, spot.v)
             depth = -rel[2]

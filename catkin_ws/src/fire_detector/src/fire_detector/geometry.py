@@ -33,21 +33,48 @@ def front_laser_range(
     out-of-range beams corrupted the mean; here only finite beams inside [range_min, range_max] count.
     Returns None when the window holds no valid beam or the scan geometry is malformed.
     """
+    valid = _valid_beams_around(ranges, angle_min, angle_increment, range_min, range_max, 0.0, angle_amplitude_deg)
+    return None if valid is None else float(valid.mean())
+
+
+def laser_range_along(
+    ranges: Sequence[float],
+    angle_min: float,
+    angle_increment: float,
+    range_min: float,
+    range_max: float,
+    bearing: float,
+    angle_amplitude_deg: float,
+) -> Optional[float]:
+    """Median range of the valid beams within +-angle_amplitude_deg of `bearing` (rad, laser frame, left
+    positive); None when there is none. The median: a doorway's edge inside the window mixes two walls,
+    whose mean lies on neither."""
+    valid = _valid_beams_around(ranges, angle_min, angle_increment, range_min, range_max, bearing,
+                                angle_amplitude_deg)
+    return None if valid is None else float(np.median(valid))
+
+
+def _valid_beams_around(ranges, angle_min, angle_increment, range_min, range_max, bearing, amplitude_deg):
+    """The finite beams inside [range_min, range_max] within +-amplitude_deg of bearing; None if none or
+    the scan geometry is malformed."""
     r = np.asarray(ranges, dtype=np.float64)
-    if r.size == 0 or not math.isfinite(angle_increment) or angle_increment == 0.0:
+    if r.size == 0 or not math.isfinite(angle_increment) or angle_increment == 0.0 or not math.isfinite(angle_min):
         return None
-    front = int(round((0.0 - angle_min) / angle_increment))
-    half = int(math.floor(math.radians(abs(angle_amplitude_deg)) / abs(angle_increment) + 1e-9))
-    lo, hi = max(0, front - half), min(r.size, front + half + 1)
+    centre = int(round((bearing - angle_min) / angle_increment))
+    half = int(math.floor(math.radians(abs(amplitude_deg)) / abs(angle_increment) + 1e-9))
+    lo, hi = max(0, centre - half), min(r.size, centre + half + 1)
     if lo >= hi:
         return None
     window = r[lo:hi]
     lo_ok = range_min if math.isfinite(range_min) else 0.0
     hi_ok = range_max if math.isfinite(range_max) and range_max > 0 else np.inf
     valid = window[np.isfinite(window) & (window >= lo_ok) & (window <= hi_ok)]
-    if valid.size == 0:
-        return None
-    return float(valid.mean())
+    return valid if valid.size else None
+
+
+def spot_bearing(u: float) -> float:
+    """Bearing (rad, left positive) of the image column u from the camera's axis."""
+    return math.atan2(-(u - C.CENTER_U), C.FOCAL_PX)
 
 
 def _to_arena(uav: Vec3, yaw: float, body: Vec3) -> Vec3:

@@ -16,7 +16,7 @@ from std_msgs.msg import Float64MultiArray
 
 from fire_detector import constants as C
 from fire_detector.detector import DetectorConfig, FireDetector, FrameResult
-from fire_detector.geometry import front_laser_range, uav_heading
+from fire_detector.geometry import front_laser_range, laser_range_along, uav_heading
 
 THROTTLE_S = 5.0
 DEBUG_IMAGE_SCALE = 8
@@ -66,6 +66,7 @@ class FireDetectorNode:
         self.lock = threading.Lock()
         self.pose: Optional[Tuple[Tuple[float, float, float], float]] = None
         self.laser_range: Optional[float] = None
+        self.scan: Optional[LaserScan] = None     # the latest, for the range along a hot spot's bearing
         self.last_spot = None
 
         self.pub = rospy.Publisher("sensed_objects", ObjectDetectionList, queue_size=1)
@@ -106,12 +107,19 @@ class FireDetectorNode:
                 rospy.logdebug_throttle(THROTTLE_S, "fire_detector: nothing within laser range ahead")
         with self.lock:
             self.laser_range = rng
+            self.scan = msg
+
+    def _range_along(self, scan: LaserScan):
+        """bearing -> the scan's range along it (geometry.laser_range_along)."""
+        return lambda bearing: laser_range_along(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min,
+                                                 scan.range_max, bearing, self.detector.config.angle_amplitude)
 
     def on_temperatures(self, msg: Float64MultiArray) -> None:
         with self.lock:
-            pose, laser = self.pose, self.laser_range
+            pose, laser, scan = self.pose, self.laser_range, self.scan
             try:
-                result = self.detector.process(msg.data, pose[0] if pose else None, pose[1] if pose else None, laser)
+                result = self.detector.process(msg.data, pose[0] if pose else None, pose[1] if pose else None, laser,
+                                               None if scan is None else self._range_along(scan))
             except ValueError as err:
                 rospy.logerr_throttle(THROTTLE_S, f"fire_detector: bad raw_temp_array: {err}")
                 return

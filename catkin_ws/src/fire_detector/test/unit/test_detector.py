@@ -7,6 +7,7 @@ import pytest
 from fire_detector import constants as C
 import synthetic_thermal as S
 from fire_detector.detector import DetectorConfig, FireDetector
+from fire_detector import geometry
 from fire_detector.geometry import front_laser_range
 
 
@@ -141,3 +142,41 @@ def test_random_scenes_recall_and_no_false_positive_small_sample():
             tp += ok
             fp += not ok
     assert pos == 6 and tp == pos and fp == 0
+
+
+def _hot_column(u, v=15):
+    frame = np.full((32, 32), 25.0)
+    frame[v - 1:v + 2, u - 1:u + 2] = 120.0
+    return frame.ravel()
+
+
+def test_a_fire_off_the_axis_is_placed_at_the_laser_range_along_its_bearing_not_the_front_one():
+    """The UGV exploring with GNSS off saw a fire 15 deg off its axis on a far wall while its front beam hit a
+    nearer wall seen at a grazing angle: placed at the front range, the estimate was 2.8 m from the fire."""
+    u = 4                                             # left of the centre
+    bearing = math.atan2(-(u - C.CENTER_U), C.FOCAL_PX)
+    fire_range = 5.0
+    ranges = np.full(720, np.inf)
+    ranges[340:381] = 2.0                             # a nearer wall across the front beams
+    k = 360 + int(round(bearing / (2 * math.pi / 720)))
+    ranges[k - 12:k + 13] = fire_range                # the far wall the fire burns on
+    along = lambda b: geometry.laser_range_along(ranges, -math.pi, 2 * math.pi / 720, 0.15, 25.0, b, 5.0)
+    truth = (fire_range * math.cos(bearing), fire_range * math.sin(bearing))
+    det = FireDetector(DetectorConfig(num_frame_filter=0))
+    front = front_laser_range(ranges, -math.pi, 2 * math.pi / 720, 0.15, 25.0, 5.0)
+    placed = det.process(_hot_column(u), (0.0, 0.0, 1.5), 0.0, front, along).fire
+    assert math.dist(placed.position[:2], truth) < 0.15
+    assert placed.depth == pytest.approx(fire_range * math.cos(bearing), abs=0.05)
+    old = FireDetector(DetectorConfig(num_frame_filter=0)).process(_hot_column(u), (0.0, 0.0, 1.5), 0.0, front).fire
+    assert math.dist(old.position[:2], truth) > 2.0   # the front range alone (the original)
+
+
+def test_no_return_along_the_spots_bearing_places_no_fire():
+    """Looking out through a gap: the wall the front beam hits is not where the fire burns."""
+    ranges = np.full(720, np.inf)
+    ranges[350:371] = 3.0
+    along = lambda b: geometry.laser_range_along(ranges, -math.pi, 2 * math.pi / 720, 0.15, 25.0, b, 2.0)
+    det = FireDetector(DetectorConfig(num_frame_filter=0))
+    r = det.process(_hot_column(3), (0.0, 0.0, 1.5), 0.0, 3.0, along)
+    assert r.fire is None and r.confirmed and "bearing" in r.reason
+    assert det.process(_hot_column(16), (0.0, 0.0, 1.5), 0.0, 3.0, along).fire is not None

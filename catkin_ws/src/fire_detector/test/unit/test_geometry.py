@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from fire_detector import constants as C
-from fire_detector.geometry import downward_fire_position, forward_fire_position, front_laser_range, uav_heading
+from fire_detector.geometry import (downward_fire_position, forward_fire_position, front_laser_range,
+                                    laser_range_along, spot_bearing, uav_heading)
 
 INC = 2 * math.pi / 720
 
@@ -65,3 +66,21 @@ def test_downward_image_top_is_front_right_is_right():
     assert rel == pytest.approx((1.0, -1.0, -5.0))
     pos, _ = downward_fire_position((10.0, 10.0, 5.0), math.pi, C.CENTER_U, C.CENTER_V)
     assert pos == pytest.approx((10.0, 10.0, 0.0))
+
+
+def test_range_along_a_bearing_is_the_median_of_its_window():
+    r = np.full(720, 20.0)
+    k = 360 + 60                                     # +30 deg (left)
+    r[k - 10:k + 11] = 3.0
+    r[k + 8:k + 11] = 9.0                            # a doorway's edge inside the window: not averaged in
+    assert laser_range_along(r, -math.pi, INC, 0.15, 25.0, math.radians(30.0), 5.0) == pytest.approx(3.0)
+    assert laser_range_along(r, -math.pi, INC, 0.15, 25.0, 0.0, 5.0) == pytest.approx(20.0)
+    r[k - 10:k + 11] = np.nan
+    assert laser_range_along(r, -math.pi, INC, 0.15, 25.0, math.radians(30.0), 5.0) is None
+    assert laser_range_along(r, float("nan"), INC, 0.15, 25.0, 0.0, 5.0) is None
+
+
+def test_spot_bearing_left_of_centre_is_positive():
+    assert spot_bearing(C.CENTER_U) == pytest.approx(0.0)
+    assert 15.0 < math.degrees(spot_bearing(0.0)) < C.FOV_DEG / 2.0      # the image's left edge
+    assert spot_bearing(C.IMG_WIDTH - 1) < 0.0
