@@ -35,6 +35,10 @@ NODE_PARAM_DEFAULTS: dict[str, object] = {
     "scan_topic": "scan",
     "scan_subscriber_queue_size": 5,
     "pub_drawings": False,
+    # not in the original (README, "beyond the original"): a frame in which base_frame's yaw is measured by
+    # another sensor (IMU / compass, e.g. the UAL's pose frame); each match starts from the last yaw turned
+    # by that yaw's change since the last scan. "" = off (the original's start: the last pose)
+    "yaw_prior_frame": "",
     "pub_debug_output": False,
 }
 

@@ -25,12 +25,13 @@ from std_msgs.msg import String
 from std_srvs.srv import SetBool, SetBoolResponse, Trigger, TriggerResponse
 
 from .constants import NODE_PARAM_DEFAULTS
-from .geometry import compose, inverse, quaternion_from_yaw, rotation_matrix, yaw_from_quaternion
+from .geometry import compose, inverse, quaternion_from_yaw, rotation_matrix, wrap_angle, yaw_from_quaternion
 from .scan import ScanFilter, check_scan, enough_points, laser_to_base, scan_to_points
 from .slam import HectorSlam, SlamParams
 
 #: How long a scan callback waits for a transform (s): short, so a missing frame never stalls the queue.
 TF_TIMEOUT = 0.1
+YAW_PRIOR_MAX_GAP = 1.0     # s between two scans beyond which the yaw prior is not used (a pause, a jump)
 #: Seconds between repeats of the same warning.
 THROTTLE = 5.0
 
@@ -104,6 +105,8 @@ class HectorMappingNode:
         self.paused = False
         self.scans_processed = 0
         self._start_pending = bool(p["use_tf_pose_start_estimate"])
+        self.yaw_prior_frame = str(p["yaw_prior_frame"])
+        self._prior_yaw: Optional[tuple[float, float]] = None     # (stamp, yaw) at the last scan processed
         self._last_map_stamp = rospy.Time(0)
 
         self.tf_buffer = tf2_ros.Buffer(rospy.Duration(30.0))
@@ -151,6 +154,7 @@ class HectorMappingNode:
                                    f"{self.filter.laser_max_dist}] m)")
             return
         stamp = msg.header.stamp
+        prior = self._prior_yaw_at(stamp)
         with self.lock:
             if self._start_pending:
                 start = self._lookup_pose(self.map_frame, self.base_frame, stamp)
@@ -161,10 +165,11 @@ class HectorMappingNode:
                 self.slam.reset(start)
                 self._start_pending = False
             try:
-                step = self.slam.process(pts, origin, stamp.to_sec())
+                step = self.slam.process(pts, origin, stamp.to_sec(), self._yaw_change(prior))
             except ValueError as e:
                 rospy.logwarn_throttle(THROTTLE, f"hector_mapping: skipping scan: {e}")
                 return
+            self._prior_yaw = prior
             self.scans_processed += 1
         self._publish_pose(step.pose, step.covariance, stamp)
         if self.cloud_pub.get_num_connections() > 0:
@@ -173,6 +178,30 @@ class HectorMappingNode:
             cloud.header.frame_id = self.base_frame
             cloud.points = [Point32(float(x), float(y), 0.0) for x, y in pts]
             self.cloud_pub.publish(cloud)
+
+    def _prior_yaw_at(self, stamp: rospy.Time) -> Optional[tuple[float, float]]:
+        """(stamp, yaw) of base_frame in ~yaw_prior_frame at the scan's own stamp; None when off or there is
+        no TF then. Not the latest TF: under load a scan is processed late, and the turn between the times
+        two scans were processed is not the turn between the scans."""
+        if not self.yaw_prior_frame:
+            return None
+        try:
+            tf = self.tf_buffer.lookup_transform(self.yaw_prior_frame, self.base_frame, stamp,
+                                                 rospy.Duration(TF_TIMEOUT))
+        except tf2_ros.TransformException as e:
+            rospy.logwarn_throttle(THROTTLE, f"hector_mapping: no yaw prior for this scan: no TF "
+                                   f"{self.yaw_prior_frame} -> {self.base_frame} at its stamp: {e}")
+            return None
+        q = tf.transform.rotation
+        return stamp.to_sec(), yaw_from_quaternion(q.x, q.y, q.z, q.w)
+
+    def _yaw_change(self, prior: Optional[tuple[float, float]]) -> Optional[float]:
+        """The turn since the last scan processed by the yaw prior (None: no prior for either scan, or more
+        than YAW_PRIOR_MAX_GAP s between them)."""
+        last = self._prior_yaw
+        if prior is None or last is None or not 0.0 <= prior[0] - last[0] <= YAW_PRIOR_MAX_GAP:
+            return None
+        return wrap_angle(prior[1] - last[1])
 
     def _laser_mount(self, msg: LaserScan) -> Optional[tuple[np.ndarray, np.ndarray]]:
         """Rotation and translation of the laser frame in the base frame (identity without TF use)."""
@@ -291,6 +320,7 @@ class HectorMappingNode:
         """Clear the map and restart at ``pose`` (default the origin)."""
         with self.lock:
             self.slam.reset(pose)
+            self._prior_yaw = None
         rospy.loginfo("hector_mapping: map reset")
 
     def _on_reset_map(self, _req) -> TriggerResponse:
@@ -308,13 +338,17 @@ class HectorMappingNode:
             self.reset()
 
     def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        """The next scan is matched from this pose (map frame); the map is kept, as the original's (its
+        `reset_map` / syscommand `reset` clear it). A way to put a lost matcher back on the map."""
         pose = _pose2d_from_msg(msg.pose.pose)
         if not np.all(np.isfinite(pose)):
             rospy.logerr_throttle(THROTTLE, "hector_mapping: ignoring initialpose with NaN/inf")
             return
-        self.reset(pose)
-        rospy.loginfo(f"hector_mapping: restarted at initialpose ({pose[0]:.2f}, {pose[1]:.2f}, "
-                      f"{math.degrees(pose[2]):.1f} deg)")
+        with self.lock:
+            self.slam.set_pose(pose)
+            self._prior_yaw = None
+        rospy.loginfo(f"hector_mapping: next match from initialpose ({pose[0]:.2f}, {pose[1]:.2f}, "
+                      f"{math.degrees(pose[2]):.1f} deg), map kept")
 
 
 def main() -> None:
