@@ -12,8 +12,16 @@ SLAM pose that wandered outdoors, far from anything, does not bias the anchor.
 
 Sources (`IndoorPose.source`): "gnss" while the UAL reports a fix, "slam" while it does not and the anchored
 SLAM pose is valid, "none" when neither: no fix and no anchor, the SLAM pose silent for longer than
-`slam_timeout`, or a SLAM pose that jumped (faster than the robot can move) since the fix was lost; "none"
-stays until the fix returns, since a jumped SLAM pose is in another frame than the anchor's.
+`slam_timeout`, or a SLAM pose that jumped (faster than the robot can move, or off the UAL's dead reckoning)
+since the fix was lost.
+
+After a jump indoors the SLAM pose is in another frame than the anchor's, and the map it matches against
+holds the scans written in the wrong pose. Re-localization (`relocalize`): the SLAM is asked to start again
+(`reset_requested`: the node sends hector_mapping `syscommand` "reset": a new, empty map whose origin is the
+pose at its next scan, exactly (0, 0, 0)); at that first pose the new map frame is anchored where the UAL's
+dead reckoning says the robot is, counted from the last anchored pose before the jump (its drift: a few
+cm/s, over the second or two this takes), with the UAL's (compass) yaw. "none" lasts only until then; a
+jump that cannot be re-anchored within `relocalize_timeout` s stays "none" until the fix returns.
 """
 from __future__ import annotations
 
@@ -26,6 +34,7 @@ import numpy as np
 from mbzirc_arena.yaw import wrap_angle
 
 GNSS, SLAM, NONE = "gnss", "slam", "none"
+ORIGIN_EPS = 1e-6    # m, rad: a new SLAM map's first pose is its origin, exactly
 
 
 @dataclass(frozen=True)
@@ -43,6 +52,9 @@ class Params:
     max_heading_disagreement: float = 0.15    # rad between the anchored SLAM heading and the UAL's
     max_motion_disagreement: float = 0.3      # m between their displacements over `motion_window`
     motion_window: float = 1.0                # s
+    # after a jump indoors: a new SLAM map anchored on the UAL's dead reckoning from the last good pose
+    relocalize: bool = True
+    relocalize_timeout: float = 10.0          # s from the jump to the new map's first pose
 
 
 @dataclass(frozen=True)
@@ -141,6 +153,9 @@ class IndoorPose:
         self.jumped = False                   # the SLAM pose jumped since the fix was lost
         self.last_slam: Optional[tuple] = None  # (t, x, y, yaw) in the map frame
         self.indoor_track: deque = deque()   # (t, anchored x, y, reported x, y) while the fix is lost
+        self.good: deque = deque()            # (t, pose x, y (corrected), reported x, y) while trusted indoors
+        self.relocalizing: Optional[tuple] = None   # (jump t, good t, pose x, y, reported x, y) until re-anchored
+        self.reset_requested = False          # the node should start the SLAM again (taken by take_reset_request)
         self.events: list[str] = []           # what a node should log (taken by pop_events)
 
     # ---------------------------------------------------------------- inputs
@@ -163,12 +178,15 @@ class IndoorPose:
                 self._fit()
             self.jumped = False
             self.indoor_track.clear()
+            self.good.clear()
+            self.relocalizing = None
             a = self.anchor
             self.events.append("GNSS lost: " + (
                 f"anchor frozen (theta {a.theta:.3f} rad, t ({a.tx:.2f}, {a.ty:.2f}) m, fit rms {a.residual:.3f} m "
                 f"over {a.pairs} pairs)" if a is not None else "no anchor yet: no valid pose until the fix returns"))
         else:
             self.lost_at = None
+            self.relocalizing = None
             self.pairs.clear()                # pairs start again on the returned fix
             self.events.append("GNSS fix regained")
 
@@ -177,13 +195,15 @@ class IndoorPose:
         if not all(math.isfinite(v) for v in (t, x, y, yaw)):
             self.events.append("ignoring a SLAM pose with NaN/inf")
             return None
+        if self.relocalizing is not None:
+            return self._relocalize(t, x, y, yaw)
         if self._is_jump(t, x, y, yaw):
             self.events.append(f"SLAM pose jumped at t={t:.2f} s")
             self.frame_changes += 1
             if self.gnss_valid:
                 self.pairs.clear()            # its frame changed (a reset?): fit the anchor again
             else:
-                self.jumped = True
+                self._jumped(t)
         self.last_slam = (t, x, y, yaw)
         rep = self.reported.at(t, self.p.max_pair_gap)
         if self.gnss_valid and rep is not None:
@@ -198,12 +218,62 @@ class IndoorPose:
         if not self.gnss_valid and rep is not None and not self.jumped:
             self._check_against_dead_reckoning(t, ax, ay, ayaw, rep)
         ax, ay, ayaw = self.correction.apply(ax, ay, ayaw)
+        if not self.gnss_valid and rep is not None and not self.jumped:
+            self.good.append((t, ax, ay, rep[0], rep[1]))
+            while len(self.good) > 1 and self.good[1][0] <= t - 2 * self.p.motion_window:
+                self.good.popleft()
         if rep is not None:
             z = rep[2]
         else:
             last = self.reported.latest()
             z = last[3] if last is not None else float("nan")
         return Output(t, ax, ay, z, ayaw, self.source(t))
+
+    def take_reset_request(self) -> bool:
+        """True once after a jump that asks for a new SLAM map (the node sends the reset)."""
+        asked, self.reset_requested = self.reset_requested, False
+        return asked
+
+    def _jumped(self, t: float) -> None:
+        """A jump indoors: no trusted pose; with `relocalize` and a good pose before it, a new SLAM map is
+        asked for. The good pose is the oldest kept (up to 2 motion_window s before): the check against the dead
+        reckoning sees a slide only once it is large, after it began."""
+        self.jumped = True
+        if not self.p.relocalize or self.anchor is None:
+            return
+        before = list(self.good)[:1]
+        if not before:
+            self.events.append(f"no anchored pose before the jump at t={t:.2f} s: no pose until the fix returns")
+            return
+        self.relocalizing = (t, *before[0])
+        self.reset_requested = True
+        self.events.append(f"re-localizing: a new SLAM map is asked for, to be anchored on the UAL's dead "
+                           f"reckoning from the pose at t={before[0][0]:.2f} s")
+
+    def _relocalize(self, t: float, x: float, y: float, yaw: float) -> Optional[Output]:
+        """While re-localizing: wait for the new map's first pose (exactly the origin), anchor it on the dead
+        reckoning, and go on from there; no pose before."""
+        jump_t, good_t, gx, gy, grx, gry = self.relocalizing
+        if t - jump_t > self.p.relocalize_timeout:
+            self.relocalizing = None
+            self.events.append(f"re-localization: no new SLAM map within {self.p.relocalize_timeout:.0f} s of "
+                               f"the jump: no pose until the fix returns")
+            return None
+        rep = self.reported.at(t, self.p.max_pair_gap)
+        if rep is None or max(abs(x), abs(y), abs(yaw)) > ORIGIN_EPS:
+            return None                       # the old map's poses, or no UAL pose to pair with
+        self.anchor = Anchor(wrap_angle(rep[3] - yaw), gx + (rep[0] - grx), gy + (rep[1] - gry))
+        self.correction = Anchor(0.0, 0.0, 0.0)
+        self.frame_changes += 1               # the outline refinement starts again in the new frame
+        self.relocalizing = None
+        self.jumped = False
+        self.indoor_track.clear()
+        self.good.clear()
+        self.last_slam = None
+        self.events.append(f"re-localized at t={t:.2f} s: the new SLAM map anchored at ({self.anchor.tx:.2f}, "
+                           f"{self.anchor.ty:.2f}) m, {self.anchor.theta:+.3f} rad, by {t - good_t:.1f} s of dead "
+                           f"reckoning")
+        return self.on_slam(t, x, y, yaw)
 
     # ---------------------------------------------------------------- state
     def source(self, now: float) -> str:
@@ -233,8 +303,8 @@ class IndoorPose:
         p = self.p
         dyaw = wrap_angle(ayaw - rep[3])
         if abs(dyaw) > p.max_heading_disagreement:
-            self.jumped = True
             self.events.append(f"SLAM pose jumped at t={t:.2f} s: its heading is {dyaw:+.2f} rad off the UAL's")
+            self._jumped(t)
             return
         track = self.indoor_track
         track.append((t, ax, ay, rep[0], rep[1]))
@@ -244,9 +314,9 @@ class IndoorPose:
         if t - t0 >= 0.5 * p.motion_window:
             off = math.hypot((ax - ax0) - (rep[0] - rx0), (ay - ay0) - (rep[1] - ry0))
             if off > p.max_motion_disagreement:
-                self.jumped = True
                 self.events.append(f"SLAM pose jumped at t={t:.2f} s: it moved {off:.2f} m otherwise than the "
                                    f"UAL's dead reckoning in {t - t0:.1f} s")
+                self._jumped(t)
 
     def _is_jump(self, t: float, x: float, y: float, yaw: float) -> bool:
         if self.last_slam is None:

@@ -118,6 +118,8 @@ class IndoorPoseNode:
         self.pub_pose = rospy.Publisher("localization/pose", PoseStamped, queue_size=5)
         self.pub_source = rospy.Publisher("localization/source", String, queue_size=1, latch=True)
         self.pub_tf = rospy.Publisher("/tf", TFMessage, queue_size=5) if self.tf_period > 0 else None
+        # hector_mapping's command topic: "reset" starts a new map (re-localization after a jump, anchor.py)
+        self.pub_slam_command = rospy.Publisher(str(g("~slam_command_topic", "syscommand")), String, queue_size=1)
         self.sent = (None, -math.inf)        # last source and when it was sent
         self.tf_sent = -math.inf
         self.m_pose = PoseStamped()
@@ -156,6 +158,9 @@ class IndoorPoseNode:
             if self.outline is not None and out is not None:
                 self.outline.update(self.core, t, (p.x, p.y, yaw), out.z)
             anchor = self.core.refined_anchor()
+            reset = self.core.take_reset_request()
+        if reset:
+            self.pub_slam_command.publish(String("reset"))
         self._log()
         if out is None:
             return
@@ -196,7 +201,7 @@ class IndoorPoseNode:
         for e in events:
             if e.startswith("ignoring"):
                 rospy.logwarn_throttle(THROTTLE, f"indoor_pose: {e}")
-            elif "jumped" in e:
+            elif "jumped" in e or e.startswith("no ") or "no pose until" in e:
                 rospy.logerr_throttle(THROTTLE, f"indoor_pose: {e}")
             else:
                 rospy.loginfo(f"indoor_pose: {e}")
