@@ -72,7 +72,7 @@ class IndoorPhase(Decider):
                                    ("view", fire.fire_id))
                 return Command(a.agent_id, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": fire.fire_id, "_floor": floor},
                                f"water on indoor fire {fire.fire_id}, floor {floor}", fire.fire_id)
-            idx = self.room_to_reach(floor, fire)
+            idx = self.room_to_reach(floor, fire, a)
             if idx is None:
                 return None
             last = self.book.last_done.get(a.agent_id)
@@ -100,26 +100,33 @@ class IndoorPhase(Decider):
                            f"searching floor {floor} indoors (room {idx})", (floor, idx))
         return self._to_room(a, floor, idx, room, inside, f"to search room {idx}")
 
-    def room_to_reach(self, floor: int, fire: FireView) -> Optional[int]:
-        """The room to reach an indoor fire through (None: no room reaches it, not a target).
+    def room_to_reach(self, floor: int, fire: FireView, a: Optional[AgentView] = None) -> Optional[int]:
+        """The room to reach an indoor fire through (None: no room reaches it, not a target); with an agent,
+        none whose window that agent failed to enter too often.
 
         Rule: the room whose search found the fire, when known and its viewpoint is reachable from there: it
-        was seen from there. Else the room of its viewpoint (the holder's side of its wall), else the room
-        that sees the estimate. Never the estimate alone first: on a wall's line, a GNSS error of a few
-        decimetres puts it on the other side or inside the wall, where no room sees it (explored layouts: the
-        nearest window may open on the wall's other side). A fire seen from one room through a doorway but
-        watered from the next one is reached through the next one: entered through the finding room, a UAV
-        found no clear way to the viewpoint, was sent out through the same window to reach that room, and
-        in again, 6 times in 300 s (realistic seed 109: floor 1 never searched)."""
+        was seen from there. Else the room of its viewpoint (the holder's side of its wall), else the rooms
+        that see the estimate, nearest first. Never the estimate alone first: on a wall's line, a GNSS error of
+        a few decimetres puts it on the other side or inside the wall, where no room sees it (explored
+        layouts: the nearest window may open on the wall's other side). A fire seen from one room through a
+        doorway but watered from the next one is reached through the next one: entered through the finding
+        room, a UAV found no clear way to the viewpoint, was sent out through the same window to reach that
+        room, and in again, 6 times in 300 s (realistic seed 109: floor 1 never searched). A window the
+        agent's laser found too narrow (an interior wall's end behind it, unknown to an explored layout)
+        gives way to the next room that sees the fire (explore + GNSS-denied seed 101: UAV 2 sent to floor
+        1's facade-B window 10 times in 250 s, none passable, its fire never watered)."""
         view = self._viewpoint_of(floor, fire)
         there = view[:3] if view is not None else fire.position
+        rooms = self.p.layout.rooms.get(floor, [])
+        candidates = []
         found = self.book.fire_rooms.get(fire.fire_id)
         if found is not None and found[0] == floor:
-            rooms = self.p.layout.rooms.get(floor, [])
             if view is None or (found[1] < len(rooms)
                                 and self.p.layout.clear_indoors(floor, rooms[found[1]].inner, there)):
-                return found[1]
-        return self.p.layout.room_for(floor, there)
+                candidates.append(found[1])
+        candidates += self.p.layout.rooms_seeing(floor, there)
+        usable = [i for i in candidates if a is None or self.book.ok(a, C.ENTER_BUILDING, (floor, i))]
+        return usable[0] if usable else None
 
     def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:
         """The layout's viewpoint (facing the holder along its normal) of the holder nearest the fire; None

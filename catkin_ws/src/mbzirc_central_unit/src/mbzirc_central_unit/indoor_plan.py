@@ -94,9 +94,14 @@ class IndoorPlan:
 
     def room_for(self, floor: int, p: Point) -> Optional[int]:
         """Index of the room of `floor` that sees the point p (nearest such room), or None."""
+        rooms = self.rooms_seeing(floor, p)
+        return rooms[0] if rooms else None
+
+    def rooms_seeing(self, floor: int, p: Point) -> list[int]:
+        """Indices of the rooms of `floor` that see the point p, nearest first."""
         walls = [thin(w) for w in self.walls_2d(floor)]
-        best = [(math.dist(r.inner, p), i) for i, r in enumerate(self.rooms.get(floor, [])) if r.sees(p, walls)]
-        return min(best)[1] if best else None
+        return [i for _d, i in sorted((math.dist(r.inner, p), i) for i, r in enumerate(self.rooms.get(floor, []))
+                                      if r.sees(p, walls))]
 
     def clear_indoors(self, floor: int, p: Point, q: Point) -> bool:
         """True if the straight line from p to q inside a floor crosses no interior wall's centre line."""

@@ -72,6 +72,9 @@ class Layout:
     def room_for(self, floor: int, p: Point) -> Optional[int]:
         return self.indoor.room_for(floor, p)
 
+    def rooms_seeing(self, floor: int, p: Point) -> list[int]:
+        return self.indoor.rooms_seeing(floor, p)
+
     def clear_indoors(self, floor: int, p: Point, q: Point) -> bool:
         return self.indoor.clear_indoors(floor, p, q)
 

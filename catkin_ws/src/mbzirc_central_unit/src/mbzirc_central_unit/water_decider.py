@@ -75,7 +75,7 @@ class WaterDecider(Decider):
             return (C.KIND_INDOOR, entered, None)
         indoor = [f for f in self._confirmed(world.fires_of(C.KIND_INDOOR)) if f.floor in self.indoor.uav_floors(world)
                   and owners.free_for(f.floor, aid, world) and self._fire_ok(a, f)
-                  and self.indoor.room_to_reach(f.floor, f) is not None]
+                  and self.indoor.room_to_reach(f.floor, f, a) is not None]
         # 0b. a known indoor fire on the floor this UAV is inside, before any job elsewhere: it is seconds
         #     away, out through the window and back in again later 60-100 s (realistic 201: a UAV that had
         #     just found its floor's fire, full tank, left to top up a facade fire already out)

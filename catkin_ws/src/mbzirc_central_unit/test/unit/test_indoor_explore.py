@@ -112,3 +112,27 @@ def test_a_window_an_agent_cannot_enter_is_given_up_and_the_next_room_taken():
     cmd = s.indoor.step(a, 1, None)
     assert cmd is None or cmd.target != (1, 0), cmd
     assert s.book.indoor_searches[(1, 0)] == 1
+
+
+def test_a_fire_behind_a_window_an_agent_cannot_enter_is_reached_through_the_next_room():
+    """Explore + GNSS-denied seed 101: in1_w (17.7, 8.5, 6.5), 1.8 m behind facade B's floor-1 window,
+    whose opening the end of the interior wall splits; UAV 2 was sent to that window 10 times in 250 s, to
+    reach the fire, and never passed it. After ~max_failures there the fire is reached through the next
+    nearest window."""
+    s = explored()
+    rooms = s.p.layout.rooms[1]
+    fire = FireView(19, 17.7, 8.5, 6.5, C.KIND_INDOOR)
+    order = sorted(range(len(rooms)), key=lambda i: math.dist(rooms[i].inner, fire.position))
+    a = uav(*rooms[order[0]].entry[:3])
+    for _ in range(s.p.max_failures):
+        cmd = s.indoor.step(a, 1, fire)
+        assert cmd.task == C.ENTER_BUILDING and cmd.target == (1, order[0])
+        s.on_sent(cmd); s.on_result(cmd, False, {"message": "window not found ahead by the laser in 20 s "
+                                                            "(no window 2.0 m wide seen): holding"})
+    cmd = s.indoor.step(a, 1, fire)
+    assert cmd is not None and cmd.target != (1, order[0]), cmd
+    assert s.indoor.room_to_reach(1, fire, a) == order[1]
+    assert s.indoor.room_to_reach(1, fire) == order[0]         # another agent may still try that window
+    other = uav(*rooms[order[0]].entry[:3])
+    other.agent_id = "3"
+    assert s.indoor.room_to_reach(1, fire, other) == order[0]
