@@ -41,6 +41,13 @@ from .control import front_distance, nearest_return
 
 MIN_BEAMS = 2              # returns in the corridor that make it blocked (one stray beam does not)
 
+BLOCKS_THE_LEG = 'blocks the leg'    # the words of a leg's failure that the laser blocked (leg_blocked)
+
+
+def leg_blocked(error: BaseException) -> bool:
+    """True when a task failed because the laser found its leg blocked (the robot stopped short, holding)."""
+    return BLOCKS_THE_LEG in str(error)
+
 
 def corridor_distances(points: np.ndarray, origin: Sequence[float], direction: Sequence[float],
                        half_width: float, reach: float) -> np.ndarray:
@@ -184,7 +191,7 @@ class LegGuard:
             if d is None:
                 return False
             left = math.hypot(target[0] - here[0], target[1] - here[1])
-            self.reason = (f'a laser return {d:.2f} m ahead blocks the leg to ({target[0]:.1f}, {target[1]:.1f}) '
+            self.reason = (f'a laser return {d:.2f} m ahead {BLOCKS_THE_LEG} to ({target[0]:.1f}, {target[1]:.1f}) '
                            f'({left:.1f} m left; guard: {a.p.leg_guard_stop_distance:.2f} m ahead, '
                            f'+-{a.p.leg_guard_half_width:.2f} m aside): holding')
             return True

@@ -16,7 +16,7 @@ from std_msgs.msg import Float64MultiArray
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
-from ..leg_guard import LegGuard
+from ..leg_guard import LegGuard, leg_blocked
 from ..wall_clearance import off_the_walls, stop_short, wall_ahead
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
@@ -27,6 +27,7 @@ from .thermal_contrast import FireContrast, pixel_bearing
 
 TOP_UP_MIN_UPDATES = 20    # detections of a track before a cold fire there is topped up
 WATERING_POSE_TOLERANCE = 0.5   # m: farther from where it saw the fire hot, the robot looks elsewhere
+BLOCKED_WATERING_SLACK = 1.5   # m beyond ~indoor_fire_distance from the estimate a blocked approach waters from
 AIM_TRIES = 6              # turns (and climbs) to the hot spot before pumping, each measured on a new image
 AIM_SIGHTING_WAIT = 1.5    # s for a thermal detection taken after a turn
 AIM_TURN_TIME = 3.0        # s at most for a turn to the hot spot
@@ -583,7 +584,7 @@ class ExtinguishIndoorFire(AgentTask):
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
         pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
-        self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
+        yaw = self._approach(ud.fire_id, fire, pos, yaw)
         self.watering_z = float(a.position()[2])
         if a.ROBOT_TYPE == 'uav':
             self.hold_xy = np.array(pos[:2], dtype=float)   # the move's set-point, held by the UAL
@@ -616,6 +617,29 @@ class ExtinguishIndoorFire(AgentTask):
         water = a.water_level if math.isfinite(a.water_level) else 0.0
         self.result.update(extinguished=out, water_left=max(0.0, water), message=f'fire {ud.fire_id} {why}')
         return C.SUCCESS
+
+    def _approach(self, fire_id: int, fire: np.ndarray, pos: tuple, yaw: float) -> float:
+        """To the watering pose pos facing yaw; the heading to water from. A leg the laser finds blocked within
+        ~indoor_fire_distance + BLOCKED_WATERING_SLACK of the fire's estimate leaves the robot watering from
+        where it stopped, facing the estimate (the check, look-around and aim on the thermal image follow):
+        the wall that blocked it is the fire's, or a corner beside it. Why (explore + GNSS-denied seed 102): a
+        UGV's estimate of a fire 0.75 m behind the wall it burns on (seen on SLAM while its pose was off) put
+        the watering pose 0.2 m from the wall; the guard stopped the leg 1 m from the wall three times, and
+        the robot gave the fire up."""
+        a = self.agent
+        try:
+            self.call_task_or_raise('move', {'waypoint': (pos, yaw)})
+            return yaw
+        except TaskError as e:
+            here = a.position()
+            near = math.dist(here[:2], fire[:2]) <= a.p.indoor_fire_distance + BLOCKED_WATERING_SLACK
+            if not (leg_blocked(e) and near):
+                raise
+            to_fire = math.atan2(fire[1] - here[1], fire[0] - here[0])
+            a.backend.logwarn(f'[{self.name}] fire {fire_id}: the approach stopped {math.dist(here[:2], fire[:2]):.1f} '
+                              f'm from its estimate ({e}): watering from here')
+            a.move_to(self, here[:3], to_fire, 'turning to the fire')
+            return to_fire
 
     def _water(self, fire_id: int, cold: ColdConfirmation, yaw: float) -> tuple:
         """Pump from here, facing yaw (the watering pose: where the fire was checked from), until the fire
