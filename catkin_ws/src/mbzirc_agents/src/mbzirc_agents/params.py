@@ -147,6 +147,8 @@ class AgentParams:
                                        'below which a robot holding indoors backs off: its radius plus a gap '
                                        'for gusts and GNSS drift')
     wall_clearance_margin: float = _param(0.2, 'm beyond ~min_wall_clearance a back-off goes to (hysteresis)')
+    lost_back_out_after: float = _param(5.0, 's with no trusted pose indoors after which an idle robot backs out '
+                                        'the way it came (way_back.py; <= 0: never)')
     aim_bearing_tolerance: float = _param(0.03, 'rad: an indoor fire this far off the heading in the thermal '
                                           'image is straight ahead (else the robot turns to it first)')
     aim_height_tolerance: float = _param(0.05, 'm: a UAV whose indoor fire is this near the height its jet lands '

@@ -36,9 +36,10 @@ from .agent_task import AgentTask, MoveTimedOut, TaskError, TaskPreempted
 from .leg_guard import malformed
 from .params import AgentParams
 from .pose_source import NONE, PoseSource
+from .way_back import WayBack
 from .pose_error_boxes import grown, pose_error_pad
 from .region_yield import STEP_LABEL, step_aside_moves
-from .wall_clearance import away_velocity
+from .wall_clearance import away_velocity, wall_ahead
 
 
 # m: a held go-to set-point is sent to the UAL again once the UAL-to-arena offset moved this far since it was
@@ -113,6 +114,8 @@ class RobotAgent(Agent):
         ifc.add_subscriber(None, C.HEARTBEAT_TOPIC, Header, self._on_heartbeat)
         self._scan: Optional[tuple] = None      # (LaserScan, receive time): keeping off walls without a pose
         self._backing_off_blind = False          # moving off a wall by the laser with no trusted pose
+        self.way_back = WayBack(C.BUILDINGS)     # the way in, backed out along with no trusted pose
+        self._lost_since: Optional[float] = None
         ifc.add_subscriber(None, 'scan', LaserScan, self._on_scan)
         self.feed_pub = ifc.add_publisher('data_feed', AgentDataFeed)
         self.vel_pub = ifc.add_publisher('ual/set_velocity', TwistStamped)
@@ -199,6 +202,11 @@ class RobotAgent(Agent):
             self._started_at_pose = True
             lost = src.source == NONE
             why = src.why
+            if lost:
+                self._lost_since = now if self._lost_since is None else self._lost_since
+            else:
+                self._lost_since = None
+                self.way_back.record(self.pose[:3])
         if switched:
             (self.backend.logwarn if lost else self.backend.loginfo)(switched)
         if lost:
@@ -391,6 +399,10 @@ class RobotAgent(Agent):
         msg.ual_state = self.ual_state
         msg.active_task = self.running_task()
         msg.active_sub_state = f'FAILED: {self.failed}' if self.failed else self.active_sub_state
+        with self.state_lock:
+            lost = None if self.pose_source.valid else self.pose_source.why
+        if lost is not None and not msg.active_task:
+            msg.active_sub_state = f'{C.NO_TRUSTED_POSE}: {lost}'
         msg.is_idle = not msg.active_task and not self.failed
         msg.battery = 1.0                    # no battery model in the simulation
         msg.water_level = self.water_level if math.isfinite(self.water_level) else 0.0
@@ -916,13 +928,15 @@ class RobotAgent(Agent):
         self.parked = self._ask('parked', box)[0]   # no region manager (yet): tried again later
 
     def _keep_off_walls_without_pose(self) -> None:
-        """Idle, moving (a flying UAV, a UGV) and with no trusted pose (pose source none): off the walls the
-        latest fresh scan shows nearer than ~min_wall_clearance, by velocity (wall_clearance.away_velocity:
-        the returns about the robot and the compass's yaw, no position), then a hold. Why: a task that failed
-        for want of a pose leaves the robot holding on the UAL's own pose, which indoors dead-reckons and
-        drifts; a UAV held in a room that way hit the building 142 s later (realistic seed 105 with no GNSS
-        indoors, mbzirc_launchers README). The central unit's next goals fail at once until a pose returns."""
-        if self.pose_source.valid or not self.p.wall_clearance or not self.is_moving_state() or self.pose is None:
+        """Idle, moving (a flying UAV, a UGV) and with no trusted pose (pose source none): with ~wall_clearance,
+        off the walls the latest fresh scan shows nearer than ~min_wall_clearance, by velocity (wall_clearance.away_velocity:
+        the returns about the robot and the compass's yaw, no position), then a hold; clear of the walls and
+        lost for ~lost_back_out_after s, back out the way it came (way_back.py), then a hold. Why: a task that
+        failed for want of a pose leaves the robot holding on the UAL's own pose, which indoors dead-reckons
+        and drifts; a UAV held in a room that way hit the building 142 s later (realistic seed 105 with no GNSS
+        indoors, mbzirc_launchers README). The central unit sends no goal while the data_feed says the pose is
+        lost (NO_TRUSTED_POSE)."""
+        if self.pose_source.valid or not self.is_moving_state() or self.pose is None:
             self._backing_off_blind = False
             return
         scan = self._scan
@@ -931,18 +945,42 @@ class RobotAgent(Agent):
         msg = scan[0]
         points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, (0.0, 0.0, 0.0, float(self.pose[3])),
                              msg.range_min, msg.range_max if msg.range_max > 0 else math.inf, keep_near=True)
-        v = away_velocity(points, self.p.min_wall_clearance, self.p.wall_clearance_margin,
-                          C.BLIND_BACK_OFF_GAIN, C.BLIND_BACK_OFF_SPEED)
+        v = None
+        if self.p.wall_clearance:
+            v = away_velocity(points, self.p.min_wall_clearance, self.p.wall_clearance_margin,
+                              C.BLIND_BACK_OFF_GAIN, C.BLIND_BACK_OFF_SPEED)
+        v_is_back_out = v is None
+        if v is None:
+            v = self._back_out_velocity(points)
         if v is None:
             if self._backing_off_blind:
-                self.send_velocity((0.0, 0.0, 0.0))      # off the wall: hold there
+                self.send_velocity((0.0, 0.0, 0.0))      # off the wall, or at the way back's end: hold there
                 self._backing_off_blind = False
             return
         if not self._backing_off_blind:
-            self.backend.logwarn(f'no trusted pose ({self.pose_source.why}): a wall nearer than '
-                                 f'{self.p.min_wall_clearance:.2f} m by the laser: moving off it')
+            self.backend.logwarn(f'no trusted pose ({self.pose_source.why}): '
+                                 + ('backing out the way it came' if v_is_back_out else
+                                    f'a wall nearer than {self.p.min_wall_clearance:.2f} m by the laser: moving off it'))
         self._backing_off_blind = True
         self.send_velocity((float(v[0]), float(v[1]), 0.0))
+
+    def _back_out_velocity(self, points: np.ndarray) -> Optional[np.ndarray]:
+        """The velocity back along the way in (way_back.py), once lost for ~lost_back_out_after s; None
+        before, and at its end (said once)."""
+        after = self.p.lost_back_out_after
+        lost_since = self._lost_since
+        if after <= 0 or lost_since is None or self.backend.now() - lost_since < after or self.way_back.done:
+            return None
+        p = self.p
+
+        def blocked(u) -> bool:
+            return wall_ahead(points, (0.0, 0.0), u, p.leg_guard_half_width, p.leg_guard_stop_distance) is not None
+        v = self.way_back.velocity(self.position(wait=0.0), blocked)
+        where = self.way_back.take_end()
+        if where is not None:
+            self.backend.logwarn(f'no trusted pose ({self.pose_source.why}): backed out the way it came as far as '
+                                 f'{where}: holding')
+        return v
 
     def _free_the_boxes_of_flight(self) -> None:
         """A landed idle UAV frees every box but its parked one. Why (realistic seed 102): a landing preempted

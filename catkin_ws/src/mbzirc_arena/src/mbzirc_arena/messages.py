@@ -49,6 +49,10 @@ ROBOT_UAV = 'uav'
 ROBOT_UGV = 'ugv'
 PAYLOAD_WATER = 'water'
 PAYLOAD_BLANKET = 'blanket'
+# AgentDataFeed active_sub_state of an idle agent with no trusted pose (no GNSS fix, no valid indoor
+# localization): '<this>: <why>'. The central unit sends it no goal meanwhile (each would fail at once, and
+# would stop the robot backing out the way it came)
+NO_TRUSTED_POSE = 'NO_TRUSTED_POSE'
 
 # ---- names (docs/interfaces.md) -------------------------------------------------------------------------
 GLOBAL_FRAME = 'arena'   # the frame of every pose the robots exchange

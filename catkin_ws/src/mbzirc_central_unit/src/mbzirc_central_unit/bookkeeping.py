@@ -181,8 +181,11 @@ class Bookkeeping:
         failures made the UGV give up its job (seen), and a water UAV give up refilling for the whole trial
         (ideal seed 7: three 'go_home_and_refill -> home unknown (no pose yet)' at 2 s, its tank reported
         empty before the first reading; 0.56 L left after its first fire, it hovered idle for 640 s). Only
-        until its first state: UNINITIALIZED later is the crash state."""
-        if not a.reported:
+        until its first state: UNINITIALIZED later is the crash state. Nor while the agent says it has no
+        trusted pose (C.NO_TRUSTED_POSE: no GNSS fix and no valid indoor localization): a goal would fail at
+        once and stop the robot backing out the way it came (explore + GNSS-denied seed 101: 7 goals in 8 s
+        to a UAV whose SLAM pose had jumped, each aborted 'no trusted pose')."""
+        if not a.reported or a.active_sub_state.startswith(C.NO_TRUSTED_POSE):
             return True
         if a.ual_state != C.UAL_UNINITIALIZED:
             self.seen_ready.add(a.agent_id)

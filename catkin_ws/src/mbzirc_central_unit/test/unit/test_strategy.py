@@ -494,6 +494,21 @@ def test_no_goal_before_the_robot_s_data_feed_carried_a_pose():
     assert cmd.agent_id == "2"
 
 
+def test_no_goal_while_the_agent_says_it_has_no_trusted_pose():
+    """Explore + GNSS-denied seed 101: a UAV whose SLAM pose had jumped indoors got 7 goals in 8 s, each
+    aborted 'no trusted pose', each stopping it where it was. While its data_feed says NO_TRUSTED_POSE it gets
+    none (it backs out the way it came); once the pose is back, it does."""
+    s = Strategy()
+    uav = AgentView("2", C.ROBOT_UAV, C.PAYLOAD_WATER, 16.0, 10.0, 7.5, ual_state=C.UAL_FLYING_AUTO,
+                    water_level=2.0, last_seen=0.0,
+                    active_sub_state=f"{C.NO_TRUSTED_POSE}: no GNSS fix and localization/source says none")
+    for t in (0.0, 0.5, 1.0):
+        assert s.decide(WorldView(t, {"2": uav}, {})) == []
+    uav.active_sub_state = ""
+    (cmd,) = s.decide(WorldView(1.5, {"2": uav}, {}))
+    assert cmd.agent_id == "2"
+
+
 def test_a_transit_starting_near_the_ground_climbs_first():
     s = Strategy()
     a = AgentView("3", C.ROBOT_UAV, C.PAYLOAD_WATER, 23.7, 21.5, 0.7, ual_state=C.UAL_FLYING_AUTO,
