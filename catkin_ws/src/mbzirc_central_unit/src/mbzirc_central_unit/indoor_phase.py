@@ -32,7 +32,7 @@ class IndoorPhase(Decider):
         """False once this agent failed to search the room, or to enter it, too often (a window the laser
         finds too narrow, e.g. an interior wall's end behind it: explored layouts know no interior wall)."""
         target = (floor, idx)
-        return self.book.ok(a, C.SEARCH_INDOOR, target) and self.book.ok(a, C.ENTER_BUILDING, target)
+        return self.book.ok(a, C.SEARCH_INDOOR, target) and self.book.window_ok(a, target)
 
     def uav_floors(self, world: WorldView) -> list[int]:
         """Indoor floors for the UAVs: floors 1-2, and the ground floor too once the UGV is gone or gave up."""
@@ -125,7 +125,7 @@ class IndoorPhase(Decider):
                                 and self.p.layout.clear_indoors(floor, rooms[found[1]].inner, there)):
                 candidates.append(found[1])
         candidates += self.p.layout.rooms_seeing(floor, there)
-        usable = [i for i in candidates if a is None or self.book.ok(a, C.ENTER_BUILDING, (floor, i))]
+        usable = [i for i in candidates if a is None or self.book.window_ok(a, (floor, i))]
         return usable[0] if usable else None
 
     def _viewpoint_of(self, floor: int, fire: FireView) -> Optional[tuple]:

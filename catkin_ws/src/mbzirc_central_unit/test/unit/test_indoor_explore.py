@@ -136,3 +136,21 @@ def test_a_fire_behind_a_window_an_agent_cannot_enter_is_reached_through_the_nex
     other = uav(*rooms[order[0]].entry[:3])
     other.agent_id = "3"
     assert s.indoor.room_to_reach(1, fire, other) == order[0]
+
+
+def test_a_window_every_agent_failed_to_enter_is_given_up_by_all():
+    """Explore + GNSS-denied seed 103: both water UAVs spent three tries of 20-25 s each on facade B's split
+    floor-1 window. After one agent's ~max_failures, another gets one try; then no agent is sent there."""
+    s = explored()
+    rooms = s.p.layout.rooms[1]
+    first, second = uav(*rooms[0].entry[:3]), uav(*rooms[0].entry[:3])
+    second.agent_id = "3"
+    for a, tries in ((first, s.p.max_failures), (second, 1)):
+        for _ in range(tries):
+            assert s.indoor.room_ok(a, 1, 0)
+            cmd = Command(a.agent_id, C.ENTER_BUILDING, {"floor": 1, "entry": rooms[0].entry}, "test", (1, 0))
+            s.on_sent(cmd); s.on_result(cmd, False, {"message": "window not found ahead by the laser in 20 s"})
+    assert not s.indoor.room_ok(first, 1, 0) and not s.indoor.room_ok(second, 1, 0)
+    third = uav(*rooms[0].entry[:3])
+    third.agent_id = "1"
+    assert not s.indoor.room_ok(third, 1, 0)
