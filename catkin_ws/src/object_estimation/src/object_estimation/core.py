@@ -17,9 +17,10 @@ Track life:
 - a track not updated for `lost_time` s becomes LOST (a tentative one is dropped instead: most likely a
   false positive); an update brings a LOST track back to ACTIVE;
 - `set_status` (the `set_object_status` service) may set any status; INACTIVE and EXTINGUISHED are
-  final: detections still refine the track (so no duplicate is created) but do not change its status,
-  and such a track takes only detections within `merge_distance` of it (its leftover heat), never those
-  of another fire a few metres away that the wide gates would let in.
+  final: such a track takes only detections within `merge_distance` of it (its leftover heat), never those
+  of another fire a few metres away that the wide gates would let in; they count as its updates (so no
+  duplicate is created) but neither move it nor change its status: a final track stays where it was put
+  out, and a track merged into it takes its place.
 """
 from __future__ import annotations
 
@@ -154,12 +155,17 @@ class ObjectEstimator:
             self.tracks[track.id] = track
             self._index_add(track)
         else:
-            p = track.covariance + np.eye(3) * self.process_noise
-            k = p @ np.linalg.inv(p + r)
-            self._move(track, track.position + k @ (z - track.position))
-            track.covariance = (np.eye(3) - k) @ p
-            if self.pose_var > 0.0:
-                track.covariance = floor_covariance(track.covariance, self.pose_var)
+            if track.status not in STICKY:
+                # a final track does not move: each detection of leftover heat within merge_distance moved
+                # it a little, towards the next fire, until it took that fire's detections and swallowed its
+                # track (explore + GNSS-denied seed 104: facade fire D_4's extinguished track crept 6 m
+                # through the tower to in1_w, which never got a track of its own and was never watered)
+                p = track.covariance + np.eye(3) * self.process_noise
+                k = p @ np.linalg.inv(p + r)
+                self._move(track, track.position + k @ (z - track.position))
+                track.covariance = (np.eye(3) - k) @ p
+                if self.pose_var > 0.0:
+                    track.covariance = floor_covariance(track.covariance, self.pose_var)
             track.num_updates += 1
             track.last_update = max(track.last_update, det.stamp)
             track = self._merge_near(track)
@@ -275,11 +281,16 @@ class ObjectEstimator:
         if other is None:
             return track
         keep, gone = (other, track) if (other.born, other.id) < (track.born, track.id) else (track, other)
-        info = np.linalg.inv(keep.covariance) + np.linalg.inv(gone.covariance)
-        cov = np.linalg.inv(info)
-        self._move(keep, cov @ (np.linalg.solve(keep.covariance, keep.position)
-                                + np.linalg.solve(gone.covariance, gone.position)))
-        keep.covariance = cov
+        final = keep if keep.status in STICKY else gone if gone.status in STICKY else None
+        if final is not None:                 # a final track stays put (see add); the merged one takes its place
+            self._move(keep, final.position.copy())
+            keep.covariance = final.covariance.copy()
+        else:
+            info = np.linalg.inv(keep.covariance) + np.linalg.inv(gone.covariance)
+            cov = np.linalg.inv(info)
+            self._move(keep, cov @ (np.linalg.solve(keep.covariance, keep.position)
+                                    + np.linalg.solve(gone.covariance, gone.position)))
+            keep.covariance = cov
         keep.num_updates += gone.num_updates
         keep.last_update = max(keep.last_update, gone.last_update)
         keep.first_seen = min(keep.first_seen, gone.first_seen)

@@ -124,6 +124,31 @@ def test_an_extinguished_fire_does_not_swallow_a_fire_next_to_it():
     assert len(est.objects()) == 2
 
 
+def test_an_extinguished_fire_does_not_creep_to_the_next_fire():
+    """Explore + GNSS-denied seed 104: facade fire D_4's track, put out, took leftover heat within its merge
+    distance, each detection moving it a little towards the next; it crept 6 m through the tower, took
+    in1_w's detections and swallowed its track, and in1_w was never watered. A final track stays put; the
+    fire 6.5 m away gets its own track however the stray detections between them lie."""
+    est = ObjectEstimator(min_updates=3)
+    facade = np.array([24.2, 8.2, 8.25])
+    for k in range(10):
+        est.add(det(facade, t=k * 0.1))
+    (fid,) = [t.id for t in est.objects()]
+    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    t = 2.0
+    for x in np.arange(24.2, 17.6, -0.4):                 # stray heat, each a step nearer the next fire
+        for _ in range(5):
+            est.add(det((x, 8.4, 7.5), t=t, cov=np.diag([1.5, 1.5, 0.5])))
+            t += 0.1
+    assert np.linalg.norm(est.tracks[fid].position - facade) < 1e-9
+    indoor = np.array([17.7, 8.5, 6.5])
+    for k in range(20):
+        last = est.add(det(indoor, t=t + k * 0.1, cov=np.diag([1.5, 1.5, 0.5])))
+    assert last.id != fid and last.status == C.STATUS_ACTIVE       # in1_w's detections: an active fire
+    assert est.tracks[fid].status == C.STATUS_EXTINGUISHED
+    assert np.linalg.norm(est.tracks[fid].position - facade) < 1e-9
+
+
 def test_ids_wrap_without_reusing_a_live_id():
     est = ObjectEstimator(min_updates=1)
     first = est.add(det((0, 0, 0))).id
