@@ -79,6 +79,9 @@ def main() -> int:
     ap.add_argument("--rate", type=int, default=25, help="py-spy samples per second")
     ap.add_argument("--top", type=int, default=8)
     ap.add_argument("--out", default="/tmp/mbzirc_profile")
+    ap.add_argument("mission_args", nargs="*", metavar="KEY=VALUE",
+                    help="more tools/run_mission.sh arguments, e.g. UNCERTAINTY=realistic GNSS_DENIED_INDOORS=1 "
+                         "INDOOR_SEARCH=explore")
     args = ap.parse_args()
     spy = shutil.which("py-spy")
     if not spy:
@@ -88,7 +91,7 @@ def main() -> int:
     os.makedirs(args.out)
     mission = subprocess.Popen(["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={args.seed}",
                                 f"RTF={args.rtf}", f"DURATION={args.duration}", "QUIET=1",
-                                f"OUT={os.path.join(args.out, 'mission')}"],
+                                f"OUT={os.path.join(args.out, 'mission')}", *args.mission_args],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     sampler = NodeCpuSampler(mission.pid).start()
     time.sleep(args.warmup)

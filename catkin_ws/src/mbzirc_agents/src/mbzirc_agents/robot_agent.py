@@ -54,6 +54,9 @@ def feed_content(msg: AgentDataFeed) -> tuple:
     return (round(p.x, 2), round(p.y, 2), round(p.z, 2), round(q.z, 3), round(q.w, 3), msg.ual_state,
             msg.active_task, msg.active_sub_state, round(msg.water_level, 2), msg.has_blanket, msg.payload)
 
+VELOCITY_MAX_AGE = 0.5    # s: an older ual/velocity is no velocity
+
+
 class RobotAgent(Agent):
     """Base of UavAgent and UgvAgent. `params`: the node's ~params that are set (name -> value, see
     params.AgentParams; ParamError when one is unknown or malformed)."""
@@ -105,6 +108,7 @@ class RobotAgent(Agent):
         ifc = self.iface
         ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
         ifc.add_subscriber(None, 'ual/state', State, self._on_state)
+        ifc.add_subscriber(None, 'ual/velocity', TwistStamped, self._on_velocity)
         ifc.add_subscriber(None, 'ual/gnss_status', NavSatStatus, self._on_gnss_status)
         ifc.add_subscriber(None, 'localization/source', String, self._on_localization_source)
         ifc.add_subscriber(None, 'localization/pose', PoseStamped, self._on_localization_pose)
@@ -115,6 +119,9 @@ class RobotAgent(Agent):
         self._scan: Optional[tuple] = None      # (LaserScan, receive time): keeping off walls without a pose
         self._backing_off_blind = False          # moving off a wall by the laser with no trusted pose
         self.way_back = WayBack(C.BUILDINGS)     # the way in, backed out along with no trusted pose
+        self._velocity: Optional[tuple] = None   # (stamp, vx, vy) of the UAL's latest velocity
+        self._velocity_arrival = -math.inf
+        self._travelled = np.zeros(2)            # its integral (m)
         self._lost_since: Optional[float] = None
         ifc.add_subscriber(None, 'scan', LaserScan, self._on_scan)
         self.feed_pub = ifc.add_publisher('data_feed', AgentDataFeed)
@@ -304,6 +311,29 @@ class RobotAgent(Agent):
                                           f'(> {self.p.pose_jump_max:.1f} m): doubted, holding')
         self._hold_still()
         return True
+
+    def _on_velocity(self, msg: TwistStamped) -> None:
+        """Integrates the UAL's horizontal velocity over its own stamps (self._travelled): no jump when the
+        pose source or the GNSS fix changes (passage._Odometer). A gap over VELOCITY_MAX_AGE is not bridged."""
+        v = msg.twist.linear
+        if not (math.isfinite(v.x) and math.isfinite(v.y)):
+            return
+        stamp = msg.header.stamp.to_sec() or self.backend.now()
+        with self.state_lock:
+            last = self._velocity
+            if last is not None and 0.0 < stamp - last[0] <= VELOCITY_MAX_AGE:
+                dt = stamp - last[0]                       # trapezoid between the two samples
+                self._travelled = self._travelled + 0.5 * dt * (np.array(last[1:]) + (v.x, v.y))
+            self._velocity = (stamp, float(v.x), float(v.y))
+            self._velocity_arrival = self.backend.now()
+
+    def travelled(self) -> Optional[np.ndarray]:
+        """The integral of the UAL's horizontal velocity (arena-aligned m; its origin is arbitrary: use
+        differences), None while the velocity is older than VELOCITY_MAX_AGE."""
+        with self.state_lock:
+            if self._velocity is None or self.backend.now() - self._velocity_arrival > VELOCITY_MAX_AGE:
+                return None
+            return self._travelled.copy()
 
     def pose_in_doubt(self) -> bool:
         """True while a GNSS jump is being doubted, or while no pose is trusted (pose source none): motion

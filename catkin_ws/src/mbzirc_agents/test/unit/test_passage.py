@@ -442,6 +442,25 @@ def test_a_passage_ends_clear_of_the_wall_whatever_the_gnss_error_does_meanwhile
     assert ual.pos[1] < WALL_Y[0] - UAV_R - 0.3, f'{WALL_Y[0] - ual.pos[1]:.2f} m off the inner face'
 
 
+@pytest.mark.parametrize('jump', [(1.2, 1.4), (-1.2, -1.4)])
+def test_realistic_105_a_pose_that_jumps_in_the_wall_neither_stalls_nor_ends_the_crossing(uav, jump):
+    """Explore + GNSS-denied seed 105: a UAV crossing its window got its fix back in the wall; the pose
+    source went slam -> ual with the frames 1.8 m apart, the progress measured on the pose stalled, the
+    passage backed out 'the way it came' in the shifted frame and the UAV hit the window's edge. Here the
+    reported pose jumps 1.8 m (out along the way, or in) once the frame is in the wall: progress by the
+    UAL's velocity goes on, the UAV crosses inside the window and ends clear of the wall, backing out never."""
+    agent, ual, be, scene = uav
+
+    def jump_in_the_wall():
+        while not any('into the wall' in m for m in be.infos) and not scene.stop:
+            be.clock.sleep(0.02)
+        ual.gnss_bias = np.array([jump[0], jump[1], 0.0])
+    be.clock.start_thread(jump_in_the_wall, name='pose jump')
+    enter_inside_the_window(be, ual)
+    assert ual.pos[1] < WALL_Y[0] - UAV_R - 0.3, f'{WALL_Y[0] - ual.pos[1]:.2f} m off the inner face'
+    assert not any('backing out' in m for m in be.warns), be.warns
+
+
 def test_a_crash_in_the_window_ends_the_passage_at_once(uav):
     """A UAL that says UNINITIALIZED (crashed) while passing: the task fails at once, no backing out
     (seen: a crashed UAV's passage went on 'backing out' for half a minute)."""

@@ -34,6 +34,7 @@ UAV holds its height on the height at the wall's entry plus its climb since by i
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Any, NamedTuple, Optional, Tuple
 
 import numpy as np
@@ -68,7 +69,53 @@ GNSS_DRIFT_MARGIN = 0.5
 # windows and hit them). Not the UGV: on the ground it neither drifts up nor down, and a doorway's edges stay
 # beside it while it waits (ugv rostests: it stalls a few seconds in doorways, and goes on)
 WALL_STALL = 2.0
+ODOMETER_HISTORY = 600     # samples of a passage's odometer kept (a minute at the control rate)
 DOORWAY_MISS = 1.0         # m: a leg meeting the wall this far beside a doorway is meant for it (GNSS error)
+
+
+class _Odometer:
+    """The robot's pose through one passage: its x, y moved by the UAL's velocity since the passage began,
+    z and yaw the pose's. Why (explore + GNSS-denied seed 105): a UAV leaving floor 1 by its window got its
+    GNSS fix back in the wall; the pose source went slam -> ual with the frames 1.8 m apart, the progress
+    through the wall measured on the pose stalled, the passage backed out 'the way it came' in the shifted
+    frame, and the UAV hit the window's edge. The integral of the velocity has no such jump; over the few
+    seconds of a passage it drifts by centimetres. Without a fresh velocity it is the pose itself (and
+    starts again from there). Its frame is the arena's when it starts."""
+
+    def __init__(self, agent) -> None:
+        self.agent = agent
+        self.history: deque = deque(maxlen=ODOMETER_HISTORY)      # (t, x, y)
+        self.origin: Optional[tuple] = None                       # (x, y, travelled) it counts from
+        self.pose()
+
+    def pose(self) -> np.ndarray:
+        a = self.agent
+        p = np.array(a.position(), dtype=float)
+        travelled = a.travelled()
+        if travelled is None:                 # no velocity: the pose, from which it starts again
+            self.origin = None
+            xy = p[:2]
+        else:
+            if self.origin is None:
+                self.origin = (p[:2].copy(), travelled)
+            xy = self.origin[0] + (travelled - self.origin[1])
+        self.history.append((a.backend.now(), *xy))
+        return np.array([xy[0], xy[1], p[2], p[3]])
+
+    def at(self, stamp: float, pose_then: np.ndarray) -> np.ndarray:
+        """The pose at stamp (a scan's) in the odometer's frame: x, y interpolated in its history, z and yaw
+        pose_then's (the pose history's); before it started, pose_then (the frames were one then)."""
+        h = self.history
+        if stamp <= h[0][0]:
+            return np.asarray(pose_then, dtype=float)
+        out = np.array(pose_then, dtype=float)
+        for (t0, x0, y0), (t1, x1, y1) in zip(h, list(h)[1:]):
+            if t0 <= stamp <= t1:
+                w = 0.0 if t1 <= t0 else (stamp - t0) / (t1 - t0)
+                out[:2] = (x0 + w * (x1 - x0), y0 + w * (y1 - y0))
+                return out
+        out[:2] = h[-1][1:]
+        return out
 
 
 def nearest_opening(kind: str, point) -> Any:
@@ -215,13 +262,14 @@ class LaserPassage:
         here = self.agent.position() if here is None else here
         return self._in_body(here, self._placed(self._scan_pose(scan), x, y))
 
-    def _see(self, scan: _Scan, width: float, expected: float, here=None) -> Optional[SeenOpening]:
+    def _see(self, scan: _Scan, width: float, expected: float, here=None, then=None) -> Optional[SeenOpening]:
         """The opening in scan, about `expected` m aside (body frame of the robot at here, default now), or
-        None; its `at`: where it is in the arena, placed with the pose of when the scan was taken."""
+        None; its `at`: where it is in the arena, placed with the pose of when the scan was taken (then,
+        default the pose history's; here and then in one frame)."""
         p = self.agent.p
         msg = scan.msg
         here = self.agent.position() if here is None else here
-        then = self._scan_pose(scan)
+        then = self._scan_pose(scan) if then is None else then
         seen = find_opening(msg.ranges, msg.angle_min, msg.angle_increment, width, expected_lateral=expected,
                             tolerance=p.opening_width_tolerance, range_min=msg.range_min,
                             range_max=msg.range_max if msg.range_max > 0 else math.inf)
@@ -367,13 +415,14 @@ class LaserPassage:
         try:
             self._last: Optional[Tuple[SeenOpening, float, np.ndarray]] = None   # (seen, when, arena x y)
             expected = self._centre(kind, heading, width, prior, ctl, height)
-            way_in = a.position()
+            odometer = _Odometer(a)                  # from here on, progress by the UAL's velocity
+            way_in = odometer.pose()
             try:
-                self._through(kind, heading, width, expected, ctl, start, u, length, height)
+                self._through(kind, heading, width, expected, ctl, start, u, length, odometer, height)
             except TaskError as e:
                 if a.ual_state == C.UAL_UNINITIALIZED:
                     raise
-                self._back_out(kind, heading, way_in, u, e)
+                self._back_out(kind, heading, way_in, u, e, odometer)
         finally:
             self._release_height_estimate()
             a.hold()
@@ -511,7 +560,8 @@ class LaserPassage:
             a.backend.sleep(dt)
 
     def _through(self, kind: str, heading: float, width: float, expected: float, ctl: OpeningPassage,
-                 start: np.ndarray, u: np.ndarray, length: float, height: Optional[float] = None) -> None:
+                 start: np.ndarray, u: np.ndarray, length: float, odometer: '_Odometer',
+                 height: Optional[float] = None) -> None:
         """Forward until `length` m along u from start, centred on the opening while its edges are seen,
         and (a UAV) at the height it centred on: by the altimeter's fresh estimate before the wall (the GNSS
         height's error wanders by decimetres in the time it takes: a window leaves 0.5 m above the frame),
@@ -547,7 +597,7 @@ class LaserPassage:
         crossing = _Crossing()
         while True:
             self._check(task)
-            p = a.position()
+            p = odometer.pose()                      # progress and the middle line: by the odometer
             done = float(np.dot(p[:3] - start[:3], u))
             clear_at = -math.inf if wall is None else wall + beyond
             if done >= length - a.p.position_tolerance and done >= clear_at:
@@ -573,7 +623,8 @@ class LaserPassage:
                 a.backend.sleep(dt)
                 continue
             msg = scan.msg
-            seen = None if passed else self._see(scan, width, expected, p)
+            then = odometer.at(scan.stamp, self._scan_pose(scan)) if scan.stamp > 0.0 else None
+            seen = None if passed else self._see(scan, width, expected, p, then)
             if seen is not None and self._last is not None \
                     and float(np.dot(np.subtract(seen.at, self._last[2]), u[:2])) > a.p.opening_jump_max:
                 seen = None          # an opening in a wall beyond (across the room), not the one passed
@@ -588,7 +639,8 @@ class LaserPassage:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     # its edges beside the robot: keep to the middle
-                    lateral = self._as_now(scan, 0.0, 0.5 * (left - right), p)[1]
+                    lateral = self._in_body(p, self._placed(then if then is not None else p, 0.0,
+                                                            0.5 * (left - right)))[1]
                     half = 0.5 * (left + right)
                     middle = _middle_point(p, lateral)
                 elif middle is not None:
@@ -647,13 +699,14 @@ class LaserPassage:
         v = ctl.through(lateral, edge_room, speed=p.opening_pass_speed)
         return v, ('' if v[0] > 0 or lateral is None else ' (the frame at an edge: re-centring)')
 
-    def _back_out(self, kind: str, heading: float, way_in: np.ndarray, u: np.ndarray, why: TaskError) -> None:
-        """Back along -u, facing heading, to where the way through began (way_in: centred, outside the wall),
-        kept off laser returns; then the TaskError `why`, saying where the robot is. Without a scan the robot
-        holds where it is (no motion it cannot see)."""
+    def _back_out(self, kind: str, heading: float, way_in: np.ndarray, u: np.ndarray, why: TaskError,
+                  odometer: '_Odometer') -> None:
+        """Back along -u, facing heading, to where the way through began (way_in: centred, outside the wall,
+        by the odometer), kept off laser returns; then the TaskError `why`, saying where the robot is.
+        Without a scan the robot holds where it is (no motion it cannot see)."""
         a, task = self.agent, self.task
         dt = 1.0 / C.CONTROL_RATE_HZ
-        depth = float(np.dot(a.position()[:3] - way_in[:3], u))
+        depth = float(np.dot(odometer.pose()[:3] - way_in[:3], u))
         if depth <= a.p.position_tolerance:
             raise TaskError(f'{why}: holding') from why
         a.backend.logwarn(f'[{task.name}] {why}: backing out of the {kind} the way it came ({depth:.1f} m)')
@@ -661,7 +714,7 @@ class LaserPassage:
         limit = depth / max(0.1, a.p.opening_speed) + a.p.opening_timeout
         while True:
             self._check(task)
-            p = a.position()
+            p = odometer.pose()
             left = float(np.dot(p[:3] - way_in[:3], u))
             if left <= a.p.position_tolerance:
                 raise TaskError(f'{why}: backed out of the {kind}, holding where the passage began') from why
