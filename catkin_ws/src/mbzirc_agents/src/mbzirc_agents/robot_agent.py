@@ -55,6 +55,7 @@ def feed_content(msg: AgentDataFeed) -> tuple:
             msg.active_task, msg.active_sub_state, round(msg.water_level, 2), msg.has_blanket, msg.payload)
 
 VELOCITY_MAX_AGE = 0.5    # s: an older ual/velocity is no velocity
+POSE_TOPIC = 'agent/pose'  # the agent's pose, published at every UAL pose (README, "Pose source")
 
 
 class RobotAgent(Agent):
@@ -109,6 +110,9 @@ class RobotAgent(Agent):
         ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
         ifc.add_subscriber(None, 'ual/state', State, self._on_state)
         ifc.add_subscriber(None, 'ual/velocity', TwistStamped, self._on_velocity)
+        # its pose as its pose source has it (arena frame): what a detector places what it sees with when there
+        # is no GNSS indoors (the UAL's own pose dead-reckons there, a metre or more off after a minute)
+        self.pose_pub = ifc.add_publisher(POSE_TOPIC, PoseStamped)
         ifc.add_subscriber(None, 'ual/gnss_status', NavSatStatus, self._on_gnss_status)
         ifc.add_subscriber(None, 'localization/source', String, self._on_localization_source)
         ifc.add_subscriber(None, 'localization/pose', PoseStamped, self._on_localization_pose)
@@ -214,6 +218,7 @@ class RobotAgent(Agent):
             else:
                 self._lost_since = None
                 self.way_back.record(self.pose[:3])
+        self.pose_pub.publish(self.pose_msg)
         if switched:
             (self.backend.logwarn if lost else self.backend.loginfo)(switched)
         if lost:
