@@ -31,9 +31,10 @@ def truth(t):
 
 
 def fly(core, t_end, bias, slam_noise=0.0, rng=None, lost=(10.0, 30.0), slam_until=math.inf, jump_at=None,
-        drift_rate=(0.05, -0.03)):
+        drift_rate=(0.05, -0.03), slam_pose=None):
     """Feed the core: reported poses at 30 Hz (truth + bias outdoors, + a growing drift indoors), the GNSS
-    status, SLAM poses at 15 Hz. Returns [(t, output, truth)]."""
+    status, SLAM poses at 15 Hz (slam_pose(t, x, y, yaw) -> the SLAM's (x, y, yaw) of the true pose; default
+    to_map, jumped by jump_at). Returns [(t, output, truth)]."""
     out = []
     gnss = True
     for k in range(int(t_end * 30) + 1):
@@ -48,8 +49,8 @@ def fly(core, t_end, bias, slam_noise=0.0, rng=None, lost=(10.0, 30.0), slam_unt
             dx, dy = dx + drift_rate[0] * (t - lost[0]), dy + drift_rate[1] * (t - lost[0])
         core.on_reported(t, x + dx, y + dy, 7.5, yaw)
         if k % 2 == 0 and t < slam_until:
-            mx, my, myaw = to_map(x, y, yaw)
-            if jump_at is not None and t >= jump_at:
+            mx, my, myaw = to_map(x, y, yaw) if slam_pose is None else slam_pose(t, x, y, yaw)
+            if slam_pose is None and jump_at is not None and t >= jump_at:
                 mx += 2.0
             if slam_noise:
                 mx, my = mx + rng.normal(0, slam_noise), my + rng.normal(0, slam_noise)
@@ -209,36 +210,26 @@ def test_a_slam_jump_indoors_is_relocalized_on_a_new_map_anchored_by_dead_reckon
     asks for a new SLAM map and anchors its first pose (the origin) where the dead reckoning says the robot
     is: the pose is trusted again within a few scans, within the dead reckoning's drift of the truth."""
     core = IndoorPose()
-    lost, drift, jump_at = (10.0, 30.0), (0.05, -0.03), 20.0
-    new_map = None                     # (theta, tx, ty): arena <- the new map, once the reset was taken
-    reset_at, outputs = None, []
-    gnss = True
-    for k in range(int(29.0 * 30) + 1):
-        t = k / 30.0
-        x, y, yaw = truth(t)
-        indoors = lost[0] <= t < lost[1]
-        if indoors == gnss:
-            gnss = not indoors
-            core.on_gnss(t, gnss)
-        dx, dy = (drift[0] * (t - lost[0]), drift[1] * (t - lost[0])) if indoors else (0.0, 0.0)
-        core.on_reported(t, x + dx, y + dy, 7.5, yaw)
-        if k % 2:
-            continue
-        if new_map is None and reset_at is not None and t >= reset_at + 0.1:
-            new_map = (yaw, x, y)      # the first scan after the reset: the new map's origin is here
-        if new_map is not None:
-            th, ox, oy = new_map
-            c, s_ = math.cos(th), math.sin(th)
-            mx, my, myaw = c * (x - ox) + s_ * (y - oy), -s_ * (x - ox) + c * (y - oy), wrap_angle(yaw - th)
-        else:
-            mx, my, myaw = to_map(x, y, yaw)
-            if t >= jump_at:
-                mx += 2.0
-        o = core.on_slam(t, mx, my, myaw)
+    jump_at = 20.0
+    state = {'reset_at': None, 'new_map': None}     # new_map: (theta, x, y) of the new map's origin
+
+    def slam_pose(t, x, y, yaw):
+        """The SLAM: jumped 2 m at jump_at; the first scan after the reset the core asked for is the new
+        map's origin (exactly 0); the core's request is taken at each of its poses."""
         if core.take_reset_request():
-            assert reset_at is None
-            reset_at = t
-        outputs.append((t, o, (x, y)))
+            assert state['reset_at'] is None
+            state['reset_at'] = t
+        if state['new_map'] is None and state['reset_at'] is not None and t >= state['reset_at'] + 0.1:
+            state['new_map'] = (yaw, x, y)
+        if state['new_map'] is None:
+            mx, my, myaw = to_map(x, y, yaw)
+            return (mx + 2.0 if t >= jump_at else mx), my, myaw
+        th, ox, oy = state['new_map']
+        c, s_ = math.cos(th), math.sin(th)
+        return c * (x - ox) + s_ * (y - oy), -s_ * (x - ox) + c * (y - oy), wrap_angle(yaw - th)
+    flown = fly(core, 29.0, (0.0, 0.0), slam_pose=slam_pose)
+    outputs = [(t, o, tr[:2]) for t, o, tr in flown]
+    reset_at = state['reset_at']
     events = core.pop_events()
     assert reset_at is not None and jump_at <= reset_at < jump_at + 0.1, events
     assert any(e.startswith("re-localized") for e in events), events

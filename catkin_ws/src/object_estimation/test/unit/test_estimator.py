@@ -99,15 +99,21 @@ def test_fires_on_two_floors_stay_apart():
     assert len(est.objects()) == 2
 
 
+def put_out_at(p):
+    """An estimator whose one fire, seen 10 times at p, was put out: (estimator, its id)."""
+    est = ObjectEstimator(min_updates=3)
+    for k in range(10):
+        est.add(det(p, t=k * 0.1))
+    (fid,) = [t.id for t in est.objects()]
+    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    return est, fid
+
+
 def test_an_extinguished_fire_does_not_swallow_a_fire_next_to_it():
     """A facade fire put out at A_2 and, 3.2 m away behind the wall, the floor-2 indoor fire seen with the
     fire detector's default covariance (1.5 m^2): the indoor fire gets its own ACTIVE track."""
-    est = ObjectEstimator(min_updates=3)
     facade = np.array([17.4, 19.5, 10.5])
-    for k in range(10):
-        est.add(det(facade, t=k * 0.1))
-    (fid,) = [t.id for t in est.objects()]
-    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    est, fid = put_out_at(facade)
     indoor = np.array([17.9, 16.5, 11.5])
     cov = np.diag([1.5, 1.5, 0.5])
     rng = np.random.default_rng(7)
@@ -129,12 +135,8 @@ def test_an_extinguished_fire_does_not_creep_to_the_next_fire():
     distance, each detection moving it a little towards the next; it crept 6 m through the tower, took
     in1_w's detections and swallowed its track, and in1_w was never watered. A final track stays put; the
     fire 6.5 m away gets its own track however the stray detections between them lie."""
-    est = ObjectEstimator(min_updates=3)
     facade = np.array([24.2, 8.2, 8.25])
-    for k in range(10):
-        est.add(det(facade, t=k * 0.1))
-    (fid,) = [t.id for t in est.objects()]
-    est.set_status(fid, C.STATUS_EXTINGUISHED)
+    est, fid = put_out_at(facade)
     t = 2.0
     for x in np.arange(24.2, 17.6, -0.4):                 # stray heat, each a step nearer the next fire
         for _ in range(5):
