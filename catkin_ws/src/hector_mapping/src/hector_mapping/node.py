@@ -107,6 +107,7 @@ class HectorMappingNode:
         self._start_pending = bool(p["use_tf_pose_start_estimate"])
         self.yaw_prior_frame = str(p["yaw_prior_frame"])
         self._prior_yaw: Optional[tuple[float, float]] = None     # (stamp, yaw) at the last scan processed
+        self._prior_tf_comes = True          # the yaw prior's TF was there at the last scan
         self._last_map_stamp = rospy.Time(0)
 
         self.tf_buffer = tf2_ros.Buffer(rospy.Duration(30.0))
@@ -185,13 +186,18 @@ class HectorMappingNode:
         two scans were processed is not the turn between the scans."""
         if not self.yaw_prior_frame:
             return None
+        # waits for the TF of the scan's stamp (it comes a moment after the scan) only while the frames are
+        # connected: a frame that is not there must not hold every scan up by the timeout (hector would fall
+        # behind its laser); a TF only late does not stop the waiting
+        wait = TF_TIMEOUT if self._prior_tf_comes else 0.0
         try:
-            tf = self.tf_buffer.lookup_transform(self.yaw_prior_frame, self.base_frame, stamp,
-                                                 rospy.Duration(TF_TIMEOUT))
+            tf = self.tf_buffer.lookup_transform(self.yaw_prior_frame, self.base_frame, stamp, rospy.Duration(wait))
         except tf2_ros.TransformException as e:
+            self._prior_tf_comes = isinstance(e, tf2_ros.ExtrapolationException)
             rospy.logwarn_throttle(THROTTLE, f"hector_mapping: no yaw prior for this scan: no TF "
                                    f"{self.yaw_prior_frame} -> {self.base_frame} at its stamp: {e}")
             return None
+        self._prior_tf_comes = True
         q = tf.transform.rotation
         return stamp.to_sec(), yaw_from_quaternion(q.x, q.y, q.z, q.w)
 
