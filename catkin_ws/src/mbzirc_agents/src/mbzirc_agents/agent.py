@@ -59,6 +59,7 @@ class Agent:
         self.backend = backend
         self.namespace = namespace
         self.iface = AgentInterface(backend)
+        self.iface.close()                    # no message reaches a callback before start(): the agent is built
         self.specs: Dict[str, TaskSpec] = {}
         self.sm: Optional[AgentStateMachine] = None
         self._lock = threading.Lock()
@@ -106,7 +107,8 @@ class Agent:
 
     # -- life
     def start(self) -> None:
-        """Build the state machine, start its thread and the action servers."""
+        """Build the state machine, start its thread and the action servers; let the messages in."""
+        self.iface.open()
         self.sm = AgentStateMachine(self, self.specs)
         self._sm_thread = self.backend.start_thread('agent_sm', self._run_sm)
         for name, spec in self.specs.items():

@@ -29,6 +29,8 @@ class AgentInterface:
         self._demands: Dict[str, list] = {}   # task name -> [(topic, type)] subscribed only while it runs
         self._demand_subs: Dict[str, list] = {}
         self._lock = threading.Lock()
+        self._open = threading.Event()        # messages are dispatched only while open (see close)
+        self._open.set()
 
     # -- activity
     def push_active(self, task_name: str) -> None:
@@ -115,7 +117,19 @@ class AgentInterface:
         if create:
             self.backend.subscriber(topic, msg_type, lambda msg, t=topic: self._dispatch(t, msg))
 
+    def close(self) -> None:
+        """Drop incoming messages until open(). Why: rospy delivers from the moment a subscriber exists, so
+        a callback may run before the agent that registered it is built (realistic + GNSS-denied seed 101:
+        a UAV's first ual/pose failed on an attribute set later in the constructor; its home was never
+        settled and every refill failed 'home unknown' for the rest of the trial)."""
+        self._open.clear()
+
+    def open(self) -> None:
+        self._open.set()
+
     def _dispatch(self, topic: str, msg: Any) -> None:
+        if not self._open.is_set():
+            return
         with self._lock:
             entry = self._subs[topic]
             names = [None] + list(self._active)

@@ -106,20 +106,6 @@ class RobotAgent(Agent):
         self._yield_order: Optional[tuple] = None # (winner, label, box) the region manager asked us to leave
         self._regions_lock = threading.Lock()
         self._last_park_try = -1e9
-        ifc = self.iface
-        ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
-        ifc.add_subscriber(None, 'ual/state', State, self._on_state)
-        ifc.add_subscriber(None, 'ual/velocity', TwistStamped, self._on_velocity)
-        # its pose as its pose source has it (arena frame): what a detector places what it sees with when there
-        # is no GNSS indoors (the UAL's own pose dead-reckons there, a metre or more off after a minute)
-        self.pose_pub = ifc.add_publisher(POSE_TOPIC, PoseStamped)
-        ifc.add_subscriber(None, 'ual/gnss_status', NavSatStatus, self._on_gnss_status)
-        ifc.add_subscriber(None, 'localization/source', String, self._on_localization_source)
-        ifc.add_subscriber(None, 'localization/pose', PoseStamped, self._on_localization_pose)
-        ifc.add_subscriber(None, 'actuators_system/water_level', Float32, self._on_water)
-        ifc.add_subscriber(None, 'actuators_system/blanket_attached', Bool, self._on_blanket)
-        ifc.add_subscriber(None, '/estimated_objects', ObjectList, self._on_objects)
-        ifc.add_subscriber(None, C.HEARTBEAT_TOPIC, Header, self._on_heartbeat)
         self._scan: Optional[tuple] = None      # (LaserScan, receive time): keeping off walls without a pose
         self._backing_off_blind = False          # moving off a wall by the laser with no trusted pose
         self.way_back = WayBack(C.BUILDINGS)     # the way in, backed out along with no trusted pose
@@ -127,6 +113,23 @@ class RobotAgent(Agent):
         self._velocity_arrival = -math.inf
         self._travelled = np.zeros(2)            # its integral (m)
         self._lost_since: Optional[float] = None
+        # Rule: every attribute a callback uses is set before the first subscriber (a message may come at once:
+        # realistic + GNSS-denied seed 101, a UAV's first ual/pose failed on an attribute set later, its home
+        # was never settled and every refill failed 'home unknown' for the rest of the trial)
+        ifc = self.iface
+        # its pose as its pose source has it (arena frame): what a detector places what it sees with when there
+        # is no GNSS indoors (the UAL's own pose dead-reckons there, a metre or more off after a minute)
+        self.pose_pub = ifc.add_publisher(POSE_TOPIC, PoseStamped)
+        ifc.add_subscriber(None, 'ual/pose', PoseStamped, self._on_pose)
+        ifc.add_subscriber(None, 'ual/state', State, self._on_state)
+        ifc.add_subscriber(None, 'ual/velocity', TwistStamped, self._on_velocity)
+        ifc.add_subscriber(None, 'ual/gnss_status', NavSatStatus, self._on_gnss_status)
+        ifc.add_subscriber(None, 'localization/source', String, self._on_localization_source)
+        ifc.add_subscriber(None, 'localization/pose', PoseStamped, self._on_localization_pose)
+        ifc.add_subscriber(None, 'actuators_system/water_level', Float32, self._on_water)
+        ifc.add_subscriber(None, 'actuators_system/blanket_attached', Bool, self._on_blanket)
+        ifc.add_subscriber(None, '/estimated_objects', ObjectList, self._on_objects)
+        ifc.add_subscriber(None, C.HEARTBEAT_TOPIC, Header, self._on_heartbeat)
         ifc.add_subscriber(None, 'scan', LaserScan, self._on_scan)
         self.feed_pub = ifc.add_publisher('data_feed', AgentDataFeed)
         self.vel_pub = ifc.add_publisher('ual/set_velocity', TwistStamped)

@@ -212,6 +212,36 @@ def test_interface_dispatch_to_active_tasks_and_default_service():
         iface.add_subscriber('c', 'topic', int, print)
 
 
+def test_a_closed_interface_drops_messages_until_opened():
+    be = FakeBackend()
+    iface = AgentInterface(be)
+    got = []
+    iface.add_subscriber(None, 'topic', str, got.append)
+    iface.close()
+    be.subs['topic']('early')
+    iface.open()
+    be.subs['topic']('late')
+    assert got == ['late']
+
+
+def test_an_agent_sees_no_message_before_it_is_started():
+    """Realistic + GNSS-denied seed 101: a UAV's first ual/pose came while its constructor was still
+    setting the attributes the pose callback uses; it failed, the home was never settled and every refill
+    failed 'home unknown' for the rest of the trial."""
+    from geometry_msgs.msg import PoseStamped
+    from mbzirc_agents.uav_agent import UavAgent
+    be = FakeBackend()
+    agent = UavAgent('2', be, {})
+    msg = PoseStamped()
+    msg.header.frame_id = 'arena'
+    msg.pose.orientation.w = 1.0
+    be.subs['ual/pose'](msg)
+    assert agent.pose is None and not be.errors
+    agent.iface.open()
+    be.subs['ual/pose'](msg)
+    assert agent.pose is not None and not be.errors, be.errors
+
+
 def test_bad_callback_is_logged_not_raised():
     be = FakeBackend()
     iface = AgentInterface(be)
