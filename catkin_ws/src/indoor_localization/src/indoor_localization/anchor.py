@@ -241,14 +241,13 @@ class IndoorPose:
         self.jumped = True
         if not self.p.relocalize or self.anchor is None:
             return
-        before = list(self.good)[:1]
-        if not before:
+        if not self.good:
             self.events.append(f"no anchored pose before the jump at t={t:.2f} s: no pose until the fix returns")
             return
-        self.relocalizing = (t, *before[0])
+        self.relocalizing = (t, *self.good[0])
         self.reset_requested = True
         self.events.append(f"re-localizing: a new SLAM map is asked for, to be anchored on the UAL's dead "
-                           f"reckoning from the pose at t={before[0][0]:.2f} s")
+                           f"reckoning from the pose at t={self.good[0][0]:.2f} s")
 
     def _relocalize(self, t: float, x: float, y: float, yaw: float) -> Optional[Output]:
         """While re-localizing: wait for the new map's first pose (exactly the origin), anchor it on the dead

@@ -44,6 +44,14 @@ MIN_BEAMS = 2              # returns in the corridor that make it blocked (one s
 BLOCKS_THE_LEG = 'blocks the leg'    # the words of a leg's failure that the laser blocked (leg_blocked)
 
 
+def blocked_reason(distance: float, target: Sequence[float], left: float, p) -> str:
+    """Why a leg to target stopped: a return `distance` m ahead, `left` m of the leg still to go (p: the agent
+    params of the guard). The words every blocked leg fails with (leg_blocked, the central unit's rules)."""
+    return (f'a laser return {distance:.2f} m ahead {BLOCKS_THE_LEG} to ({target[0]:.1f}, {target[1]:.1f}) '
+            f'({left:.1f} m left; guard: {p.leg_guard_stop_distance:.2f} m ahead, '
+            f'+-{p.leg_guard_half_width:.2f} m aside)')
+
+
 def leg_blocked(error: BaseException) -> bool:
     """True when a task failed because the laser found its leg blocked (the robot stopped short, holding)."""
     return BLOCKS_THE_LEG in str(error)
@@ -191,9 +199,7 @@ class LegGuard:
             if d is None:
                 return False
             left = math.hypot(target[0] - here[0], target[1] - here[1])
-            self.reason = (f'a laser return {d:.2f} m ahead {BLOCKS_THE_LEG} to ({target[0]:.1f}, {target[1]:.1f}) '
-                           f'({left:.1f} m left; guard: {a.p.leg_guard_stop_distance:.2f} m ahead, '
-                           f'+-{a.p.leg_guard_half_width:.2f} m aside): holding')
+            self.reason = blocked_reason(d, target, left, a.p) + ': holding'
             return True
         return blocked
 

@@ -113,9 +113,7 @@ class RobotAgent(Agent):
         self._velocity_arrival = -math.inf
         self._travelled = np.zeros(2)            # its integral (m)
         self._lost_since: Optional[float] = None
-        # Rule: every attribute a callback uses is set before the first subscriber (a message may come at once:
-        # realistic + GNSS-denied seed 101, a UAV's first ual/pose failed on an attribute set later, its home
-        # was never settled and every refill failed 'home unknown' for the rest of the trial)
+        # (no message reaches a callback before start(): AgentInterface.close)
         ifc = self.iface
         # its pose as its pose source has it (arena frame): what a detector places what it sees with when there
         # is no GNSS indoors (the UAL's own pose dead-reckons there, a metre or more off after a minute)

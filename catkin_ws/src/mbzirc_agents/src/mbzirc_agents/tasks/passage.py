@@ -256,11 +256,13 @@ class LaserPassage:
         d = world_to_body((point[0] - pose[0], point[1] - pose[1], 0.0), pose[3])
         return float(d[0]), float(d[1])
 
-    def _as_now(self, scan: _Scan, x: float, y: float, here=None) -> Tuple[float, float]:
+    def _as_now(self, scan: _Scan, x: float, y: float, here=None, then=None) -> Tuple[float, float]:
         """A point (x, y) of scan's body frame in the body frame of the robot at here (default: now),
-        placed with the pose of when the scan was taken."""
+        placed with the pose of when the scan was taken (then, default the pose history's; here and then in
+        one frame)."""
         here = self.agent.position() if here is None else here
-        return self._in_body(here, self._placed(self._scan_pose(scan), x, y))
+        then = self._scan_pose(scan) if then is None else then
+        return self._in_body(here, self._placed(then, x, y))
 
     def _see(self, scan: _Scan, width: float, expected: float, here=None, then=None) -> Optional[SeenOpening]:
         """The opening in scan, about `expected` m aside (body frame of the robot at here, default now), or
@@ -623,7 +625,8 @@ class LaserPassage:
                 a.backend.sleep(dt)
                 continue
             msg = scan.msg
-            then = odometer.at(scan.stamp, self._scan_pose(scan)) if scan.stamp > 0.0 else None
+            # the pose the scan was taken at, in the odometer's frame (as p): at its stamp, or when it came
+            then = odometer.at(scan.stamp if scan.stamp > 0.0 else scan.received, self._scan_pose(scan))
             seen = None if passed else self._see(scan, width, expected, p, then)
             if seen is not None and self._last is not None \
                     and float(np.dot(np.subtract(seen.at, self._last[2]), u[:2])) > a.p.opening_jump_max:
@@ -639,8 +642,7 @@ class LaserPassage:
                 left, right = side_clearances(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min)
                 if abs(left + right - width) <= a.p.opening_width_tolerance:
                     # its edges beside the robot: keep to the middle
-                    lateral = self._in_body(p, self._placed(then if then is not None else p, 0.0,
-                                                            0.5 * (left - right)))[1]
+                    lateral = self._as_now(scan, 0.0, 0.5 * (left - right), p, then)[1]
                     half = 0.5 * (left + right)
                     middle = _middle_point(p, lateral)
                 elif middle is not None:

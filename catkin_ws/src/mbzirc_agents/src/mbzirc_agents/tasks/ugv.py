@@ -13,7 +13,7 @@ from mbzirc_arena.routing import plan_2d
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
-from ..leg_guard import BLOCKS_THE_LEG, LegGuard, blocking_distance, leg_blocked
+from ..leg_guard import LegGuard, blocked_reason, blocking_distance, leg_blocked
 from ..wall_clearance import back_off, wall_ahead
 from .indoor import SearchIndoor
 
@@ -157,9 +157,7 @@ class GuardedDrive:
     def _blocked(self, points, here, target, blocked: float, left: float, what: str) -> None:
         """Back off from returns nearer than ~min_wall_clearance, and fail saying why."""
         a = self.agent
-        reason = (f'a laser return {blocked:.2f} m ahead {BLOCKS_THE_LEG} to ({target[0]:.1f}, {target[1]:.1f}) '
-                  f'({left:.1f} m left; guard: {a.p.leg_guard_stop_distance:.2f} m ahead, '
-                  f'+-{a.p.leg_guard_half_width:.2f} m aside)')
+        reason = blocked_reason(blocked, target, left, a.p)
         off = back_off(points, here, a.p.min_wall_clearance, a.p.wall_clearance_margin)
         if off is not None:
             n = float(np.hypot(off[0], off[1]))
