@@ -38,6 +38,9 @@ from .anchor import Anchor, compose
 
 IDENTITY = Anchor(0.0, 0.0, 0.0)
 COVERAGE_BIN = 0.25          # m: bins along a wall line when measuring how the returns spread along it
+SURFACE_BIN = 0.1            # m: bands parallel to a wall when looking for its outermost surface
+SURFACE_DEPTH = 0.6          # m: returns this far in from the outermost surface may belong to it (a wall
+                             # tilted by the anchor's yaw error spreads over a band this deep)
 
 
 def wrap_half(a):
@@ -97,8 +100,15 @@ def transform(points: np.ndarray, theta: float, tx: float, ty: float) -> np.ndar
 
 @dataclass(frozen=True)
 class RefineParams:
-    gate_unobserved: float = 1.2     # m around a wall's predicted line while its offset is not observed
+    gate_unobserved: float = 1.5     # m around an inner face's predicted line while its offset is not
+                                     # observed (metre-class GNSS error; interior walls stand further in)
+    gate_unobserved_outside: float = 2.5  # m likewise for an outer face seen from outside (nothing stands
+                                     # between it and the robot: a wider gate catches a larger GNSS error)
     gate: float = 0.3                # m once observed (plus 3 std of the prediction)
+    side_gate: float = 1.2           # m: a robot this close to a wall's line may be on either side of it
+    look_beyond: float = 3.0         # m beyond a wall's predicted line where no surface may stand
+    surface_points: int = 5          # returns in a band parallel to a wall that make a surface ...
+    surface_spread: float = 1.0      # m ... spread over this much of its length (not a window's reveal)
     min_points: int = 15             # returns supporting a wall line
     min_span: float = 1.5            # m of wall the supporting returns must spread over ...
     min_coverage: float = 0.5        # ... with returns in this share of its 0.25 m stretches
@@ -112,7 +122,7 @@ class RefineParams:
     thickness_sigma: float = 0.25    # m ... and its std (set small if it is known)
     max_std: float = 0.1             # m: a direction is corrected once the correction's std along it is below
     max_yaw_std: float = 0.03        # rad: likewise the yaw
-    max_correction: float = 1.5      # m: a larger fitted correction is rejected
+    max_correction: float = 3.0      # m: a larger fitted correction is rejected
     max_yaw_correction: float = 0.15  # rad
     max_wall_residual: float = 0.25  # m: a wall whose observations the fit misses by more is dropped
     observations_per_wall: int = 20  # the latest ones kept per wall and side
@@ -212,7 +222,7 @@ class OutlineRefiner:
         out, and does not decide inside or outside; the others still count (from a window, the room)."""
         standing = [k for k, f in enumerate(self.faces) if f.top > z]
         side = {k: self._side(k, robot) for k in standing}
-        clear = {k for k in standing if not (abs(side[k]) < self._gate(k, False)
+        clear = {k for k in standing if not (abs(side[k]) < min(self._gate(k, False), self.p.side_gate)
                                              and -0.5 < self._along(self.faces[k], np.array([robot]))[0]
                                              < self.faces[k].length + 0.5)}
         buildings = {self.faces[k].building for k in standing}
@@ -238,7 +248,8 @@ class OutlineRefiner:
         f, cov = self.faces[k], self.correction.cov
         j = np.array([f.normal[0], f.normal[1], 0.0, -1.0 if inner else 0.0])
         std = math.sqrt(max(float(j @ cov @ j), 0.0))
-        return min(self.p.gate_unobserved, self.p.gate + 3.0 * std)
+        wide = self.p.gate_unobserved if inner else self.p.gate_unobserved_outside
+        return min(wide, self.p.gate + 3.0 * std)
 
     def _observe(self, t: float, k: int, inner: bool, pts: np.ndarray, in_map: np.ndarray,
                  refined: Anchor) -> Optional[WallObservation]:
@@ -249,7 +260,15 @@ class OutlineRefiner:
         line = f.offset - (self.correction.thickness if inner else 0.0)
         d = pts @ np.array(f.normal) - line
         along = self._along(f, pts)
-        sel = (np.abs(d) < self._gate(k, inner)) & (along > -0.3) & (along < f.length + 0.3)
+        gate = self._gate(k, inner)
+        on_wall = (along > -0.3) & (along < f.length + 0.3)
+        looked = on_wall & (d > -gate) & (d < max(gate, p.look_beyond))
+        if looked.sum() < p.min_points:
+            return None
+        outermost = self._outermost_surface(d[looked], along[looked])
+        if outermost is None or outermost >= gate:
+            return None                      # nothing there, or a surface beyond the wall's gate: not the wall
+        sel = looked & (d > outermost - SURFACE_DEPTH)
         if sel.sum() < p.min_points:
             return None
         # robust line: start from the returns near a Theil-Sen line of offset against place along the wall
@@ -284,6 +303,25 @@ class OutlineRefiner:
         rms = max(rms, 0.005)
         return WallObservation(t, k, inner, (float(centroid[0]), float(centroid[1])), angle, len(q),
                                rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3))
+
+    def _outermost_surface(self, d: np.ndarray, along: np.ndarray) -> Optional[float]:
+        """The offset of the outermost surface parallel to a wall among returns at offsets d (> 0 outwards)
+        and places `along` it: the outermost band 2 SURFACE_BIN deep holding `surface_points` returns
+        spread over `surface_spread` m of its length. Rule: an outline wall is the building's outermost
+        surface, from inside (its inner face: beyond it only what a window shows, further out) and from
+        outside (its outer face: nothing stands between it and the robot but small things). So the caller
+        takes the outermost surface within the gate and `look_beyond` m outwards, and none when it lies
+        beyond the gate: an interior wall parallel to an outer wall is not taken for it when the outer
+        wall is seen beyond it (through a doorway), and when the outer wall is only glimpsed the line
+        found there fails the coverage checks. Narrow things (a window's reveal, a holder, a robot) do
+        not make a surface."""
+        p = self.p
+        band = np.floor(d / SURFACE_BIN).astype(int)
+        for b in np.unique(band)[::-1]:
+            mine = (band == b) | (band == b - 1)
+            if mine.sum() >= p.surface_points and np.ptp(along[mine]) >= p.surface_spread:
+                return float(d[mine].max())
+        return None
 
     # ---------------------------------------------------------------- the correction
     def _fit(self, anchor: Anchor) -> None:

@@ -115,6 +115,35 @@ def test_outline_refines_an_anchor_off_by_0_6_m_and_0_05_rad():
         assert abs(eyaw) < 0.01
 
 
+def test_a_metre_class_gnss_error_is_refined_from_the_facade_outside_then_the_room():
+    """An anchor 2.2 m off (a GNSS bias beyond the old 1.2 m gate left a whole indoor flight 1.7 m off,
+    explore + GNSS-denied mission seed 103): the facade, seen from outside with the wide outside gate,
+    gives x; the room's walls, y."""
+    rng = np.random.default_rng(11)
+    anchor = anchor_with_error((-2.0, 0.9), 0.02)
+    refiner = OutlineRefiner(outline_faces(FOOTPRINTS))
+    path = [(-3.0, 5.0, 0.0)] * 5 + WINDOW_PATH[5:]
+    corr = run(refiner, anchor, path, rng)
+    assert corr.observed == 2 and corr.yaw_observed
+    for x, y, yaw in path[5:]:
+        assert math.hypot(*pose_error(refiner, anchor, x, y, yaw)[:2]) < 0.05, (x, y)
+
+
+def test_an_interior_wall_is_not_taken_for_the_outer_wall_seen_beyond_it():
+    """South of the west room's interior wall (y 7), the north wall (inner face y 9.7) seen through its
+    doorway; the anchor 1.3 m off in y puts the interior wall within the north wall's gate: the north
+    wall observed is the north wall, not the interior wall, the nearer and larger surface."""
+    rng = np.random.default_rng(12)
+    anchor = anchor_with_error((0.0, 1.3), 0.0)
+    refiner = OutlineRefiner(outline_faces(FOOTPRINTS))
+    run(refiner, anchor, [(2.7, 5.5, 1.57), (2.9, 5.2, 1.4), (2.5, 5.6, 1.7)], rng)
+    north = next(k for k, f in enumerate(refiner.faces) if f.name == "north")
+    seen = refiner.walls.get((north, True), [])
+    assert seen
+    for o in seen:
+        assert TRUE_ANCHOR.apply(o.centroid[0], o.centroid[1], 0.0)[1] == pytest.approx(Y1 - T, abs=0.1)
+
+
 def test_inside_only_opposite_walls_give_the_thickness_and_the_fix():
     rng = np.random.default_rng(2)
     anchor = anchor_with_error((-0.5, 0.4), -0.04)
