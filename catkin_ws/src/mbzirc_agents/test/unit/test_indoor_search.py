@@ -2,7 +2,7 @@
 already inside searches back the way it came."""
 import numpy as np
 import pytest
-from mbzirc_comm_objs.msg import SearchIndoorGoal
+from mbzirc_comm_objs.msg import Object, ObjectList, SearchIndoorGoal
 from mbzirc_comm_objs.srv import CheckFireResponse
 
 from fake_backend import FakeBackend
@@ -64,3 +64,17 @@ def test_ideal_5_a_look_waits_for_a_detector_that_starts_late(ugv_inside):
     be.handlers['thermal_detection/fire_detected'] = late_detector
     s, outcome = search(be)
     assert outcome == 'succeeded' and 'no indoor fire found' in s.result.message, s.result.message
+
+
+def test_seed_104_a_search_reports_only_fires_it_saw_hot(ugv_inside):
+    """An indoor fire's track already on the floor (seen through a window from outside) was reported by every
+    search at its first look, hot or cold: the central unit took those reports for sightings (which room
+    sees the fire, a doubted fire found again). A search whose camera never sees it hot reports none."""
+    agent, ual, be = ugv_inside
+    o = Object(id=11, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_ACTIVE, num_updates=5)
+    o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = 17.7, 8.5, 1.0
+    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    s, outcome = search(be)
+    assert outcome == 'succeeded', s.result.message
+    assert list(s.result.fire_ids) == [] and 'no indoor fire found' in s.result.message, s.result.message

@@ -67,8 +67,9 @@ class Bookkeeping:
                 self.unconfirmed.note_watered_hot(cmd.target)   # the agents succeed only after watering it hot
             if result.get("fire_ids"):
                 self.pending_ids[cmd.agent_id] = ({int(i) for i in result["fire_ids"]}, PENDING_TICKS)
-                if cmd.task == C.SEARCH_FACADE:   # it reports only fires it saw hot (indoors: the floor's tracks)
-                    self.notes += [n for n in map(self.unconfirmed.note_found, map(int, result["fire_ids"])) if n]
+                if cmd.task in (C.SEARCH_FACADE, C.SEARCH_INDOOR):   # they report only fires they saw hot
+                    self.notes += [n for n in (self.unconfirmed.note_found(int(i), cmd.task)
+                                               for i in result["fire_ids"]) if n]
                 if cmd.task == C.SEARCH_INDOOR and isinstance(cmd.target, tuple) \
                         and all(isinstance(k, int) for k in cmd.target):   # a room's (floor, index)
                     for i in result["fire_ids"]:

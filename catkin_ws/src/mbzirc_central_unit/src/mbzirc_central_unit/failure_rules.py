@@ -20,10 +20,10 @@
    Rule: after `not_seen_hot_limit` such aborts (any robots) the fire is doubted: no robot is sent to it
    while other work remains; it may be revisited when nothing else is left. Watered hot before: "probably
    out, unconfirmed" (its floor is done, water_decider.facade_floors_open). Never watered hot: "misplaced":
-   its facade floor is searched again (once). A facade search that reports a doubted fire (it reports only
-   fires it saw hot at a holder; the estimator moved the track onto the new sightings: a detection within
-   its gates updates it, no new track) makes it a target again, once per fire; doubted again, it stays so
-   until the end. (search_indoor reports every known track of its floor, hot or not: no such evidence.)
+   its facade floor is searched again (once). A search that reports a doubted fire (the searches report only
+   fires they saw hot: a facade search at a holder, an indoor search from a room; the estimator moved the
+   track onto the new sightings: a detection within its gates updates it, no new track) makes it a target
+   again, once per fire; doubted again, it stays so until the end.
    A facade fire watered hot before is doubted after `facade_top_up_limit` (1) such aborts: its hole was
    locked by the circle detector and watered ~top_up_time s, and a facade fire the thermal camera no longer
    sees hot is at 85 % or more (the detector's contrast test), which that water finishes; the second abort
@@ -135,15 +135,17 @@ class UnconfirmedFires:
         return (f"{head}, never watered hot: misplaced (its estimate off the fire), not a target while other work "
                 f"remains; {again}")
 
-    def note_found(self, fire_id: int) -> Optional[str]:
-        """A facade search reported `fire_id` (seen hot at a holder, its track near): a doubted fire is a target
-        again (its count starts again), once per fire; the log line then."""
+    def note_found(self, fire_id: int, search: str = "search_facade") -> Optional[str]:
+        """A search (its task name) reported `fire_id`, seen hot (a facade search at a holder, its track near;
+        an indoor search from a room): a doubted fire is a target again (its count starts again), once per
+        fire; the log line then. An indoor fire seen from outside through a window was doubted after water
+        from outside and found hot by every indoor search after (explore + GNSS-denied seed 104)."""
         if not self.doubted(fire_id) or fire_id in self.found_again_once:
             return None
         what = "probably out" if self.probably_out(fire_id) else "misplaced"
         self.found_again_once.add(fire_id)
         del self.aborts[fire_id]
-        return f"fire {fire_id}: {what}, found again (hot) by a facade search: a target again at its estimate"
+        return f"fire {fire_id}: {what}, found again (hot) by {search}: a target again at its estimate"
 
     def doubted(self, fire_id: int) -> bool:
         """Probably out or misplaced: no robot is sent to it while other work remains."""

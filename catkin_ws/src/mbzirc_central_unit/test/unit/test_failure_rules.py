@@ -310,8 +310,8 @@ def test_a_misplaced_facade_fire_gets_one_search_again_and_is_then_left_for_the_
 
 def test_an_indoor_fire_never_seen_hot_from_its_watering_pose_is_misplaced_not_probably_out():
     """Same rule indoors (one fact, failure_rules.UnconfirmedFires): 'not seen hot' twice without any water
-    seen going into it hot is a doubted estimate, not a fire out. search_indoor reports every known track of
-    its floor, hot or not: its report does not make the fire a target again."""
+    seen going into it hot is a doubted estimate, not a fire out. An indoor search that saw it hot (searches
+    report only fires seen hot) makes it a target again, once."""
     s = Strategy(StrategyParams(facade_searches=0))
     for agent in ("3", "2"):
         cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
@@ -322,6 +322,13 @@ def test_an_indoor_fire_never_seen_hot_from_its_watering_pose_is_misplaced_not_p
     cmds = s.decide(_inside_world(C.STATUS_ACTIVE))
     assert cmds and not _on_fire(cmds, 18)             # doubted: not a target while other work remains
     s.book.in_flight.clear()
+    _searched(s, "2", 2, [18], C.SEARCH_INDOOR, (2, 1))
+    assert _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)
+    s.book.in_flight.clear()
+    for agent in ("3", "2"):                            # doubted again: so until the end
+        cmd = Command(agent, C.EXTINGUISH_INDOOR_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
+        s.on_sent(cmd)
+        s.on_result(cmd, False, {"message": NOT_HOT_INDOORS, "extinguished": False}, now=0.0)
     _searched(s, "2", 2, [18], C.SEARCH_INDOOR, (2, 1))
     assert not _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)
 
@@ -364,3 +371,22 @@ def test_a_facade_fire_probably_out_that_a_facade_search_sees_hot_again_is_a_tar
     _abort(s, "3", NOT_HOT)
     _searched(s, "2", 1, [7])                          # once only
     assert s.probably_out(7) and [f.fire_id for f in s.water._confirmed(facade)] == [5]
+
+
+def test_seed_104_an_indoor_fire_doubted_after_water_from_outside_is_a_target_again_once_a_room_sees_it_hot():
+    """in1_w, behind a facade window, got a facade track from outside: watered through the window (tank dry),
+    then not seen hot from outside once: probably out. Every indoor search after saw it hot (its track now
+    indoors) and the fire burned to the end, no robot sent to it while other work remained."""
+    s = Strategy(StrategyParams(facade_searches=0))
+    _watered_hot(s, "3", 18, C.EXTINGUISH_FACADE_FIRE, 2)
+    cmd = Command("2", C.EXTINGUISH_FACADE_FIRE, {"fire_id": 18, "_floor": 2}, "water on fire 18", 18)
+    s.on_sent(cmd)
+    s.on_result(cmd, False, {"message": NOT_HOT, "extinguished": False}, now=0.0)
+    assert s.probably_out(18)
+    s.take_notes()
+    assert not _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)      # other work remains (fire 5)
+    s.book.in_flight.clear()
+    _searched(s, "2", 2, [18], task=C.SEARCH_INDOOR, target=(2, 1))         # a room's search saw it hot
+    assert any("fire 18" in n and "found again (hot) by search_indoor" in n for n in s.take_notes())
+    assert not s.probably_out(18)
+    assert _on_fire(s.decide(_inside_world(C.STATUS_ACTIVE)), 18)          # before: left to the end

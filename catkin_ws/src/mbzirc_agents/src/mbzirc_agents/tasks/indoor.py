@@ -165,7 +165,7 @@ class SearchIndoor(AgentTask):
             found = self._look_once(floor, each)
             if found:
                 return found
-        return self._fires(floor)
+        return []
 
     def _off_the_walls(self, p):
         """p, or the place off the walls the laser sees nearer than ~min_wall_clearance (a UAV, indoors).
@@ -184,11 +184,15 @@ class SearchIndoor(AgentTask):
 
     def _look_once(self, floor: int, seconds: float) -> list:
         """One look the way the robot faces: the floor's fire ids once the estimator has a track of a fire
-        the thermal camera saw hot (waiting up to ~confirm_time for it)."""
-        if self._hot(seconds):
-            end = self.agent.backend.now() + self.agent.p.confirm_time
-            while not self._fires(floor) and self.agent.backend.now() < end:
-                self.sleep(0.25)
+        the thermal camera saw hot (waiting up to ~confirm_time for it); none after a cold look.
+        Rule: a search reports only fires it saw hot, so that its result means "burning, seen from this
+        room": the central unit reaches a fire through the rooms that reported it, and takes a fire it
+        doubted (not seen hot after water) as a target again when a search saw it hot."""
+        if not self._hot(seconds):
+            return []
+        end = self.agent.backend.now() + self.agent.p.confirm_time
+        while not self._fires(floor) and self.agent.backend.now() < end:
+            self.sleep(0.25)
         return self._fires(floor)
 
     def _hot(self, seconds: float) -> bool:
