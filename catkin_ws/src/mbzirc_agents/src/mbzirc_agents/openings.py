@@ -4,8 +4,8 @@ Why: the robots fly and drive on GNSS, a metre off; a straight leg through a 2 m
 arena frame hits the frame. The thesis detected the window before entering; the laser sees the opening as
 it is, in the robot's own frame.
 
-How: the wall is the nearest straight run of returns ahead (a line x = d + k y in the body frame, fitted
-to the beams within +-`max_angle` of the heading); each beam is then *wall* (on the line, within
+How: the wall is the nearest straight run of returns ahead, one stretch sideways (a line x = d + k y in
+the body frame, fitted to the beams within +-`max_angle` of the heading); each beam is then *wall* (on the line, within
 `wall_depth` behind it: the window's reveal in a thick wall counts), *through* (clearly beyond it, or no
 return at all), *near* (something in front of the wall) or *unknown* (NaN, below the range minimum). An
 opening is a run of through / unknown beams bounded by wall beams on BOTH sides (a building's corner, open
@@ -43,13 +43,31 @@ class SeenOpening:
     at: Optional[Tuple[float, float]] = None
 
 
-def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_slope: float = 0.5,
-               min_span: float = 1.0) -> Optional[Tuple[float, float]]:
-    """(d, k) of the nearest wall x = d + k y facing the robot, or None: at least min_beams returns within
-    +-band of the line, spread over min_span m sideways, at most max_slope off square (a side wall beside
-    the robot, whose returns also crowd at a short x, is none).
+def _one_stretch(y: np.ndarray, inl: np.ndarray, max_gap: float) -> np.ndarray:
+    """inl reduced to its largest stretch along y with no gap wider than max_gap between neighbours."""
+    idx = np.flatnonzero(inl)
+    if idx.size < 2:
+        return inl
+    idx = idx[np.argsort(y[idx])]
+    cuts = np.flatnonzero(np.diff(y[idx]) > max_gap) + 1
+    best = max(np.split(idx, cuts), key=len)
+    out = np.zeros_like(inl)
+    out[best] = True
+    return out
 
-    The nearest, not the largest: through a window the far side of the room may hold more beams."""
+
+def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_slope: float = 0.5,
+               min_span: float = 1.0, max_gap: float = 3.0) -> Optional[Tuple[float, float]]:
+    """(d, k) of the nearest wall x = d + k y facing the robot, or None: at least min_beams returns within
+    +-band of the line, in one stretch sideways (no gap wider than max_gap, wider than any opening passed)
+    spread over min_span m, at most max_slope off square (a side wall beside the robot, whose returns also
+    crowd at a short x, is none).
+
+    The nearest, not the largest: through a window the far side of the room may hold more beams. One
+    stretch: near a room's corner the side walls' returns at the sector's ends lie at a short x too, metres
+    apart sideways; taken with the wall's, they made a line of no wall (recorded inside views: the UGV
+    just inside its door, a UAV 1.4 m aside of its window, its heading 7 deg off the wall's normal). The
+    line is fitted again on the returns near the last fit, so that a wall seen at a slant is followed."""
     order = np.sort(x)
     if order.size < min_beams:
         return None
@@ -60,8 +78,8 @@ def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_sl
             continue
         tried = float(c)
         d, k, inl = float(c), 0.0, None
-        for tol in (band, 0.5 * band):
-            inl = np.abs(x - (d + k * y)) <= tol
+        for tol in (band, band, 0.5 * band):
+            inl = _one_stretch(y, np.abs(x - (d + k * y)) <= tol, max_gap)
             if inl.sum() < min_beams:
                 inl = None
                 break
