@@ -115,11 +115,12 @@ def flight_summary(robot: str, period: tuple, slam: Sequence[Sample], truth: Seq
                    floor_of: Callable[[float], int], max_gap: float = MAX_GAP_S, on_slam_s: float = 0.0,
                    slam_spans: Sequence[tuple] = ()) -> dict:
     """One flight's entry of summary.json: robot, floor, start, end, duration, time on the slam source,
-    SLAM poses, error samples, RMS and max, and RMS and max while on the slam source (`slam_spans`)."""
+    SLAM poses, error samples, RMS and max, and RMS and max while on the slam source (`slam_spans`), with
+    the error of its first sample there and the time of its worst."""
     t0, t1 = period
     inside = [s for s in slam if t0 <= s[0] <= t1]
     times = [s[0] for s in inside]
-    errors, used, floors = [], [], Counter()
+    errors, used, used_t, floors = [], [], [], Counter()
     for t, x, y, z in (s for s in truth if t0 <= s[0] <= t1):
         floors[floor_of(z)] += 1
         est = interpolate_xy(inside, t, max_gap, times)
@@ -127,13 +128,17 @@ def flight_summary(robot: str, period: tuple, slam: Sequence[Sample], truth: Seq
             errors.append(math.hypot(est[0] - x, est[1] - y))
             if any(a <= t <= b for a, b in slam_spans):
                 used.append(errors[-1])
+                used_t.append(t)
     if not floors:                       # no truth in the flight: the SLAM pose's own heights say where
         floors.update(floor_of(s[3]) for s in inside)
     return {"robot": robot, "floor": floors.most_common(1)[0][0] if floors else None,
             "t_start": round(t0, 2), "t_end": round(t1, 2), "duration_s": round(t1 - t0, 2),
             "on_slam_s": round(on_slam_s, 2), "slam_poses": len(inside), "samples": len(errors),
             "rms_error_m": _rms(errors), "max_error_m": round(max(errors), 3) if errors else None,
-            "rms_on_slam_m": _rms(used), "max_on_slam_m": round(max(used), 3) if used else None}
+            "rms_on_slam_m": _rms(used), "max_on_slam_m": round(max(used), 3) if used else None,
+            # where the error came from: the anchor's inheritance (the first sample) or later (the worst's time)
+            "first_on_slam_m": round(used[0], 3) if used else None,
+            "t_max_on_slam": round(used_t[max(range(len(used)), key=used.__getitem__)], 2) if used else None}
 
 
 @dataclass

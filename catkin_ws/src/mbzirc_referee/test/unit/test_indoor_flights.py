@@ -77,8 +77,12 @@ def test_the_error_on_slam_counts_only_while_the_robot_flew_on_it():
                        slam_spans=[(0.0, 5.0)])
     assert f["max_error_m"] > 1000.0                                  # every sample: the unused pose too
     assert f["max_on_slam_m"] == pytest.approx(0.0, abs=1e-6) and f["rms_on_slam_m"] == pytest.approx(0.0, abs=1e-6)
+    h = flight_summary("3", (0.0, 10.0), _slam(0.0, 10.0, offset=(0.0, 0.0)), _truth(0.0, 10.0), FLOOR_OF,
+                       on_slam_s=5.0, slam_spans=[(2.0, 8.0)])
+    assert h["first_on_slam_m"] == pytest.approx(0.0, abs=1e-6) and 2.0 <= h["t_max_on_slam"] <= 8.0
     g = flight_summary("3", (0.0, 10.0), slam, _truth(0.0, 10.0), FLOOR_OF)
     assert g["rms_on_slam_m"] is None and g["max_on_slam_m"] is None   # never on slam: only watched
+    assert g["first_on_slam_m"] is None and g["t_max_on_slam"] is None
 
 
 def test_samples_outside_the_flight_or_without_slam_poses_around_do_not_count():
