@@ -10,6 +10,7 @@ pumped at holders of that kind, pooled over the runs, from each summary's `water
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
     python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3   (seeds 101-120, never tuned on)
     python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3 --indoor-search explore --gnss-denied-indoors
+    ... --world c3_floor_plan_b   (another floor plan: other interior walls, doorways and indoor fire places)
 The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`). `--uncertainty realistic` runs the
 trial with the real one's uncertainty (ual_sim README, "Uncertainty"), starts at seed 101 unless
 --first-seed says otherwise, and writes bench/results/mission_realistic.json. Issue 18's trial:
@@ -38,7 +39,8 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
            f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1",
            f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SEARCH={getattr(args, 'indoor_search', 'plan')}",
-           f"GNSS_DENIED_INDOORS={'1' if denied else ''}", f"INDOOR_SLAM={int(denied or getattr(args, 'indoor_slam', False))}"]
+           f"GNSS_DENIED_INDOORS={'1' if denied else ''}", f"INDOOR_SLAM={int(denied or getattr(args, 'indoor_slam', False))}",
+           f"WORLD={world_path(getattr(args, 'world', ''))}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sampler = NodeCpuSampler(proc.pid).start()
@@ -103,12 +105,27 @@ def format_water(eff: dict) -> str:
                      for k, v in eff.items())
 
 
+WORLDS = os.path.join(ROOT, "catkin_ws", "src", "ual_sim", "src", "ual_sim", "worlds")
+
+
+def world_path(world: str) -> str:
+    """A ual_sim world yaml: a path, or a name of ual_sim's worlds (c3_floor_plan_b); "" = the default."""
+    if not world or os.path.exists(world):
+        return world
+    named = os.path.join(WORLDS, world if world.endswith(".yaml") else world + ".yaml")
+    if not os.path.exists(named):
+        raise SystemExit(f"bench_mission: --world {world!r}: no such file, nor a world of ual_sim ({WORLDS})")
+    return named
+
+
 def result_name(args: argparse.Namespace) -> str:
-    """bench/results file name: mission[_<uncertainty>][_explore][_gnss_denied]."""
+    """bench/results file name: mission[_<uncertainty>][_explore][_gnss_denied][_<world>]."""
     name = "mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}"
     if args.indoor_search == "explore":
         name += "_explore"
-    return name + ("_gnss_denied" if args.gnss_denied_indoors else "")
+    name += "_gnss_denied" if args.gnss_denied_indoors else ""
+    world = getattr(args, "world", "")
+    return name + (f"_{os.path.splitext(os.path.basename(world))[0]}" if world else "")
 
 
 def summarize(runs: list, args: argparse.Namespace) -> dict:
@@ -138,6 +155,7 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
                                             "slam_error_m", "error")} for r in runs],
     }
     res["indoor_search"], res["gnss_denied_indoors"] = args.indoor_search, args.gnss_denied_indoors
+    res["world"] = os.path.basename(args.world) if args.world else "default"
     res["all_indoor_out_ratio"] = round(sum(1 for r in ok if r.get("indoor_total") and r["indoor_out"] == r["indoor_total"])
                                         / len(runs), 3) if runs else None
     res["seeds_requested"] = args.seeds
@@ -163,6 +181,9 @@ def main() -> int:
                     help="explore: the robots search indoors on their laser, nothing read of the interior (issue 18)")
     ap.add_argument("--gnss-denied-indoors", action="store_true",
                     help="no GNSS inside buildings; the robots fly there on hector_mapping (INDOOR_SLAM on)")
+    ap.add_argument("--world", default="",
+                    help="a ual_sim world yaml, or the name of one of ual_sim's (c3_floor_plan_b: other interior "
+                         "walls, doorways and indoor fire places); its name is added to the result file's")
     ap.add_argument("--runs-dir", default=None,
                     help="where each trial's folder (summary, report, logs) goes")
     args = ap.parse_args()
