@@ -21,6 +21,15 @@ frozen on `none`; the offset applied follows the target one at most at ~pose_off
 agent's pose does not jump when the source switches (a passage through a window measures its progress on
 it). The UAL's drift moves the measured offset by a few cm/s: the robot agent sends a held set-point again
 when the applied offset moved (robot_agent, FRAME_RESEND_DISTANCE).
+
+A UAL pose that steps further than the robot can fly since the previous one (~max_speed, + FRAME_JUMP_MARGIN)
+while the UAL leaves its dead reckoning (without a fix, and up to DEAD_RECKONING_AFTER_FIX s after the fix
+returned: the status and the pose race) is a change of the UAL's own frame, not a move: the step goes into
+the applied offset at once, so the agent's pose stays where the robot is, and the offset then glides to the
+target as above (a step of the GNSS pose with a fix is the robot agent's pose-jump doubt's). Why: back outside, the
+UAL's pose leaves its drifted dead reckoning for GNSS in one step; the offset applied was the drift (3.6 m
+after 150 s inside) and gliding it off at 0.5 m/s put the agent's pose, and every target it sent, metres off
+for seconds: explore + GNSS-denied seed 104, a UAV just out of a window flew back into its edge.
 """
 from __future__ import annotations
 
@@ -35,6 +44,9 @@ from .params import AgentParams
 UAL, SLAM, NONE = 'ual', 'slam', 'none'
 LOCALIZATION_VALID = 'slam'     # indoor_localization's localization/source when its pose is the one to use
 UAL_HISTORY = 90                # UAL poses kept to pair a localization pose with (3 s at ual_sim's 30 Hz)
+FRAME_JUMP_MARGIN = 0.3         # m beyond what the robot can fly between two UAL poses: the UAL's frame changed
+FRAME_JUMP_MAX_GAP = 1.0        # s: two UAL poses further apart are not compared (the robot may have moved)
+DEAD_RECKONING_AFTER_FIX = 2.0  # s after the fix returned that the UAL's pose may still step off its dead reckoning
 
 
 def choose(fix: bool, localization_valid: bool) -> str:
@@ -61,15 +73,40 @@ class PoseSource:
         self._none_since: Optional[float] = None
         self._last_update: Optional[float] = None
         self._ual: deque = deque(maxlen=UAL_HISTORY)                 # (stamp, x, y) of UAL poses
+        self.frame_jump: Optional[np.ndarray] = None                 # the last one absorbed, until taken
+        self._dead_reckoning = False          # the UAL's frame may be its dead reckoning (no fix lately)
+        self._fix_back_at: Optional[float] = None                   # UAL stamp when the fix was seen back
 
     # ---- inputs -------------------------------------------------------------------------------------------
     def on_ual(self, stamp: float, x: float, y: float) -> None:
         if self._ual and stamp < self._ual[-1][0]:
             self._ual.clear()                 # time went back (sim restart, bag loop)
+        if self._dead_reckoning and self.fix:
+            self._fix_back_at = stamp if self._fix_back_at is None else self._fix_back_at
+            self._dead_reckoning = stamp - self._fix_back_at <= DEAD_RECKONING_AFTER_FIX
+        if self._dead_reckoning and self._ual and stamp - self._ual[-1][0] <= FRAME_JUMP_MAX_GAP:
+            t0, x0, y0 = self._ual[-1]
+            step = np.array([x - x0, y - y0])
+            if float(np.linalg.norm(step)) > self.p.max_speed * (stamp - t0) + FRAME_JUMP_MARGIN:
+                self.applied = self.applied + step          # the UAL's frame moved, not the robot
+                self.frame_jump = step
+                self._ual.clear()             # the history is in the old frame: no pairing across the jump
         self._ual.append((stamp, x, y))
+
+    def take_frame_jump(self) -> Optional[str]:
+        """The log line of a change of the UAL's frame absorbed since the last call, or None."""
+        if self.frame_jump is None:
+            return None
+        step, self.frame_jump = self.frame_jump, None
+        return (f'ual/pose stepped ({step[0]:+.2f}, {step[1]:+.2f}) m, more than the robot can fly: the UAL\'s '
+                f'frame changed (GNSS back?); the agent\'s pose kept, UAL frame - arena now '
+                f'({self.applied[0]:+.2f}, {self.applied[1]:+.2f}) m, gliding towards '
+                f'({self.target_offset()[0]:+.2f}, {self.target_offset()[1]:+.2f}) m')
 
     def on_gnss(self, fix: bool) -> None:
         self.fix = bool(fix)
+        if not self.fix:
+            self._dead_reckoning, self._fix_back_at = True, None
 
     def on_localization_source(self, text: str) -> None:
         self.localization_source = str(text)

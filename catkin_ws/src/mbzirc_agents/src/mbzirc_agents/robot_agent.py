@@ -204,6 +204,7 @@ class RobotAgent(Agent):
             src = self.pose_source
             src.on_ual(stamp, p.x, p.y)
             switched = src.update(now)
+            frame_jump = src.take_frame_jump()
             x, y = src.to_arena(p.x, p.y)
             self.pose = np.array([x, y, p.z, yaw])
             self.pose_msg = msg if (x, y) == (p.x, p.y) else self._arena_pose_msg(msg, x, y)
@@ -220,6 +221,8 @@ class RobotAgent(Agent):
                 self._lost_since = None
                 self.way_back.record(self.pose[:3])
         self.pose_pub.publish(self.pose_msg)
+        if frame_jump:
+            self.backend.logwarn(frame_jump)
         if switched:
             (self.backend.logwarn if lost else self.backend.loginfo)(switched)
         if lost:

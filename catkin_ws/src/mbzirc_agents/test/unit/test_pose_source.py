@@ -124,6 +124,40 @@ def test_back_outside_the_fix_wins_and_the_offset_glides_back_to_zero():
     assert src.applied == pytest.approx([0.0, 0.0])
 
 
+def test_seed_104_back_outside_the_ual_frames_step_to_gnss_keeps_the_agents_pose():
+    """150 s inside, the UAL's dead reckoning had drifted (+2.43, +2.68) m; out of the window its pose stepped
+    back to GNSS. The offset glided off at 0.5 m/s: the agent's pose, and every target sent, were metres off
+    for seconds, and the UAV flew back into the window's edge. The step is the UAL's frame: absorbed at once."""
+    src = PoseSource(cfg(offset_rate=0.5))
+    t, drift, bias = 0.0, np.array([2.43, 2.68]), np.array([0.3, -0.4])
+    for _ in range(80):                                    # hovering inside on the SLAM pose
+        t += 0.1
+        indoors(src, t, tuple(np.array([20.0, 19.0]) + drift), (20.0, 19.0))
+    assert src.applied == pytest.approx(drift, abs=1e-6)
+    before = src.to_arena(*(np.array([20.0, 19.0]) + drift))
+    src.on_gnss(True)                                      # out: the fix, and the UAL's pose on GNSS again
+    t += 1.0 / 30
+    src.on_ual(t, *(np.array([20.0, 19.0]) + bias))
+    assert 'slam -> ual' in src.update(t)
+    assert 'frame changed' in src.take_frame_jump() and src.take_frame_jump() is None
+    assert src.to_arena(*(np.array([20.0, 19.0]) + bias)) == pytest.approx(before, abs=0.02)   # no jump
+    ux, uy = src.to_ual(20.0, 22.3)                        # a target 3.3 m out, in the UAL's (GNSS) frame
+    assert math.dist((ux, uy), (20.0 + bias[0], 22.3 + bias[1])) < 0.05   # before: 3.6 m off, into the wall
+    for _ in range(30):                                    # then the offset glides to 0: the GNSS pose
+        t += 0.1
+        src.on_ual(t, *(np.array([20.0, 19.0]) + bias))
+        src.update(t)
+    assert src.applied == pytest.approx([0.0, 0.0], abs=1e-6)
+    # a GNSS step long after the fix returned is not the UAL's frame (the agent's pose-jump doubt's)
+    src.on_ual(t + 0.1, 21.0 + bias[0], 19.0 + bias[1])
+    assert src.take_frame_jump() is None
+    # inside, a robot flying at its speed is no frame change
+    src = PoseSource(cfg(offset_rate=0.5))
+    for k in range(20):
+        indoors(src, 0.1 * k, (20.0 + 0.16 * k, 19.0), (20.0 + 0.16 * k, 19.0))
+    assert src.take_frame_jump() is None
+
+
 def test_use_localization_false_keeps_the_ual_pose():
     src = PoseSource(cfg(use_localization=False, grace=0.0))
     indoors(src, 1.0, (0.0, 0.0), (1.0, 1.0))
