@@ -1028,6 +1028,36 @@ def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside
         f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a faint warm area'
 
 
+@pytest.mark.parametrize('window', [True, False])
+def test_seed_106_a_warm_area_seen_through_a_window_beside_the_fire_is_not_taken_for_it(scenes, window):
+    """Explore + GNSS-denied seed 106: in1_w, 98 % out and too faint to see, stands beside a window; four
+    top-ups each looked around, took the warmest area, 33 deg off the heading and 29-37 degC over its wall
+    (the sun-heated outside, through the window), and poured their whole tank there. The laser places a
+    warm area: along its bearing a window (no return) is not the fire; a wall 0.85 m beside the fire's
+    estimate may be (its GNSS error: realistic seed 103), and the robot turns onto it."""
+    from laser_world import LaserScene
+    sc = scenes(hot_until=0.0)
+    laser = LaserScene(sc.be, sc.ual, noisy=False)
+    wall = [(4.05, -0.5, 4.25, 5.0), (4.05, -5.0, 4.25, -2.0)] if window else [(4.05, -5.0, 4.25, 5.0)]
+    laser.boxes = wall                     # the fire's wall (x 4.05), a window at y -2.0..-0.5 in it or not
+    sc.threads = (laser,)
+    sc.be.clock.sleep(0.5)
+    rng = np.random.default_rng(7)
+    yaw0 = []
+
+    def frame():                           # a strong warm area 0.5 rad right of the first heading
+        if not yaw0:
+            yaw0.append(sc.ual.yaw)
+        return frame_at(30.0, -0.5 - (sc.ual.yaw - yaw0[0]), 0.0, rng)
+    sc.ual.thermal = frame
+    sc.extinguish(timeout=60)
+    turned = math.remainder(sc.ual.yaw - yaw0[0], 2 * math.pi)
+    if window:
+        assert abs(turned) < 0.05, f'turned {turned:+.2f} rad onto a warm area seen through the window'
+    else:
+        assert turned < -0.35, f'turned {turned:+.2f} rad: not onto the warm area on the fire\'s wall'
+
+
 class DriftsOutOfView:
     """The fire seen hot and watered, then (after `after` s of pumping) out of the camera's view `offset` rad to
     the left, as when the aim frozen on it drifts off: in view it is a ring of flames 25 degC over its wall
