@@ -11,6 +11,7 @@ import threading
 from collections import deque
 
 import rospy
+from rospy.numpy_msg import numpy_msg
 from geometry_msgs.msg import PoseStamped, Quaternion, TransformStamped
 from sensor_msgs.msg import LaserScan, NavSatStatus
 from std_msgs.msg import String
@@ -79,16 +80,19 @@ class OutlineRefinement:
         anchor = core.anchor
         if anchor is None:
             return
-        if core.gnss_valid:
-            self.refiner.forget_before(t - self.outdoor_memory, anchor)
         if t - self.last >= self.scan_period or t < self.last:
             scan = next((m for st, m in tuple(self.scans) if abs(st - t) < SCAN_STAMP_MATCH), None)
+            # outdoors the old observations go first; one fit for both (the scan's, or a refit)
+            dropped = core.gnss_valid and self.refiner.forget_before(t - self.outdoor_memory, anchor, refit=False)
+            found = []
             if scan is not None and math.isfinite(z):
                 self.last = t
                 pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, range_min=scan.range_min,
                                   range_max=scan.range_max)
-                self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset)
+                found = self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset)
                 self._log()
+            if dropped and not found:
+                self.refiner.refit(anchor)
         at = anchor.apply(pose[0], pose[1], 0.0)[:2]
         core.correction = self.smoother.step(t, self.refiner.correction.transform, at)
 
@@ -128,7 +132,8 @@ class IndoorPoseNode:
                      rospy.Subscriber("ual/gnss_status", NavSatStatus, self.on_gnss, queue_size=5),
                      rospy.Subscriber("slam_out_pose", PoseStamped, self.on_slam, queue_size=5)]
         if self.outline is not None:
-            self.subs.append(rospy.Subscriber("scan", LaserScan, self.outline.on_scan, queue_size=2))
+            # numpy_msg: the ranges as an array, not a tuple of 720 floats (every scan is read, 1 in 3 used)
+            self.subs.append(rospy.Subscriber("scan", numpy_msg(LaserScan), self.outline.on_scan, queue_size=2))
         self.timer = PeriodicTimer(SOURCE_CHECK_PERIOD, self.on_timer, "indoor pose source")
 
     # ---------------------------------------------------------------- callbacks

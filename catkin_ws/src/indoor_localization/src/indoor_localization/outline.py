@@ -170,10 +170,11 @@ class OutlineRefiner:
         return Correction(IDENTITY, p.thickness, 0, False, 0,
                           np.diag([p.prior_sigma ** 2] * 2 + [p.yaw_prior_sigma ** 2, p.thickness_sigma ** 2]))
 
-    def forget_before(self, t: float, anchor: Anchor) -> None:
-        """Drop the observations made before t. Outdoors, where hector_mapping's pose may wander far from
-        anything (its README, "Known limitations"), only the last seconds before entering count, as for the
-        anchor; indoors nothing is forgotten (the walls are seen again and again, the last ones kept)."""
+    def forget_before(self, t: float, anchor: Anchor, refit: bool = True) -> bool:
+        """Drop the observations made before t; True when some were. Outdoors, where hector_mapping's pose
+        may wander far from anything (its README, "Known limitations"), only the last seconds before
+        entering count, as for the anchor; indoors nothing is forgotten (the walls are seen again and again,
+        the last ones kept). refit False: the caller fits next (`on_scan`, or `refit`)."""
         before = sum(len(q) for q in self.walls.values())
         for key in list(self.walls):
             q = self.walls[key]
@@ -181,9 +182,16 @@ class OutlineRefiner:
                 q.popleft()
             if not q:
                 del self.walls[key]
+        dropped = sum(len(q) for q in self.walls.values()) < before
         if not self.walls:
             self.correction = self._no_correction()
-        elif sum(len(q) for q in self.walls.values()) < before:
+        elif dropped and refit:
+            self._fit(anchor)
+        return dropped
+
+    def refit(self, anchor: Anchor) -> None:
+        """Fit the correction again on the kept observations against `anchor`."""
+        if self.walls:
             self._fit(anchor)
 
     def reset(self) -> None:

@@ -84,30 +84,42 @@ class FloorGrid:
 
     # ---- sensing ---------------------------------------------------------------------------------------
     def add_scan(self, origin: Sequence[float], points: np.ndarray) -> None:
-        """Add one scan's returns (N x 2, arena frame) seen from origin (x, y)."""
+        """Add one scan's returns (N x 2, arena frame) seen from origin (x, y): each beam passes the cells of
+        its samples every half cell from the origin (up to the first outside the footprint: out through a
+        window, nothing more of this floor), and hits its end's cell. Vectorised over every sample of the
+        scan at once (a look adds ~720 beams of up to 80 samples each; one cell lookup per sample in Python
+        cost tens of milliseconds per scan)."""
         ox, oy = float(origin[0]), float(origin[1])
-        hits, passed = set(), set()
-        for px, py in np.asarray(points, dtype=float).reshape(-1, 2):
-            length = math.hypot(px - ox, py - oy)
-            steps = int(length / (0.5 * self.res))
-            for k in range(steps):
-                c = self.cell(ox + (px - ox) * k / max(steps, 1), oy + (py - oy) * k / max(steps, 1))
-                if c is None:
-                    break          # left the footprint (out through a window): nothing more of this floor
-                passed.add(c)
-            end = self.cell(px, py)
-            if end is not None:
-                hits.add(end)
-        for c in passed - hits:      # a wall seen edge-on is not freed by a neighbouring beam of the same scan
-            if self.cells[c] == UNKNOWN:
-                self.cells[c] = FREE
-            elif self.cells[c] == OCCUPIED:
-                self.misses[c] += 1
-                if self.misses[c] >= CLEAR_SCANS:
-                    self.cells[c] = FREE
-        for c in hits:
-            self.cells[c] = OCCUPIED
-            self.misses[c] = 0
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if not len(pts):
+            return
+        rel = pts - (ox, oy)
+        steps = (np.hypot(rel[:, 0], rel[:, 1]) / (0.5 * self.res)).astype(int)
+        beam = np.repeat(np.arange(len(pts)), steps)
+        k = np.arange(beam.size) - np.repeat(np.cumsum(steps) - steps, steps)      # sample index along its beam
+        t = k / np.maximum(steps, 1)[beam]
+        i = np.floor((ox + rel[beam, 0] * t - self.x0) / self.res).astype(int)
+        j = np.floor((oy + rel[beam, 1] * t - self.y0) / self.res).astype(int)
+        out = (i < 0) | (i >= self.nx) | (j < 0) | (j >= self.ny)
+        first_out = np.full(len(pts), np.iinfo(np.int64).max)
+        np.minimum.at(first_out, beam[out], k[out])
+        keep = k < first_out[beam]
+        passed = np.unique(i[keep] * self.ny + j[keep])
+        ei = np.floor((pts[:, 0] - self.x0) / self.res).astype(int)
+        ej = np.floor((pts[:, 1] - self.y0) / self.res).astype(int)
+        inside = (ei >= 0) & (ei < self.nx) & (ej >= 0) & (ej < self.ny)
+        hits = np.unique(ei[inside] * self.ny + ej[inside])
+        # a wall seen edge-on is not freed by a neighbouring beam of the same scan
+        freed = np.setdiff1d(passed, hits, assume_unique=True)
+        cells, misses = self.cells.reshape(-1), self.misses.reshape(-1)        # views
+        state = cells[freed]
+        cells[freed[state == UNKNOWN]] = FREE
+        occ = freed[state == OCCUPIED]
+        misses[occ] += 1
+        cells[occ[misses[occ] >= CLEAR_SCANS]] = FREE
+        cells[hits] = OCCUPIED
+        misses[hits] = 0
 
     # ---- where the robot may stand ---------------------------------------------------------------------
     def to_outline(self) -> np.ndarray:

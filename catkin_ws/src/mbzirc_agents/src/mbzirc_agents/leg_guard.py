@@ -122,35 +122,24 @@ class LegGuard:
     def __init__(self, task: Any) -> None:
         self.task = task
         self.agent = task.agent
-        self._scan: Optional[Tuple[Any, float, np.ndarray]] = None     # (LaserScan, receive time, pose then)
-        self._blind = False                                              # the latest usable scan's every beam NaN
         self.reason = ''                                                 # why the last check blocked
-        # always (not only while the task runs): a leg checks the scan of before its start, not none
-        task.iface.add_subscriber(None, 'scan', LaserScan, self._on_scan)
-        # bad input is reported while the task runs (the always-on cache above stays silent: one report)
+        # the scans are the agent's (robot_agent.latest_scan: always on, so a leg checks the scan of before its
+        # start, not none); bad input is reported while the task runs (the agent's cache stays silent)
         task.iface.add_subscriber(task.name, 'scan', LaserScan, self._report_bad)
-
-    def _on_scan(self, msg: LaserScan) -> None:
-        """Keep the latest scan with the pose of its arrival; a malformed one is ignored."""
-        if malformed(msg):
-            return
-        try:
-            pose = self.agent.position(wait=0.0)
-        except TaskError:
-            return
-        self._blind = is_blind(msg.ranges)
-        self._scan = (msg, self.agent.backend.now(), pose)
 
     def _report_bad(self, msg: LaserScan) -> None:
         be = self.agent.backend
         if malformed(msg):
             be.logerr_throttle(5.0, f'[{self.task.name}] scan: empty or bad angles, ignored')
-        elif is_blind(msg.ranges):
+            return
+        latest = self.agent.latest_scan()
+        if latest[3] if latest is not None and latest[0] is msg else is_blind(msg.ranges):
             be.logerr_throttle(5.0, f'[{self.task.name}] scan: every beam NaN (laser blind): holding')
 
     def _fresh(self) -> Optional[Tuple[Any, np.ndarray]]:
-        scan = self._scan
-        if scan is None or self.agent.backend.now() - scan[1] > C.SCAN_MAX_AGE:
+        """(LaserScan, the pose of its arrival) of the agent's latest scan while fresh, else None."""
+        scan = self.agent.latest_scan()
+        if scan is None or scan[2] is None or self.agent.backend.now() - scan[1] > C.SCAN_MAX_AGE:
             return None
         return scan[0], scan[2]
 
@@ -167,7 +156,8 @@ class LegGuard:
     def blind(self) -> bool:
         """True while the latest usable scan, however old, is blind (every beam NaN): a laser that went blind
         and then silent still sees nothing (no velocity towards a wall it cannot see)."""
-        return self._blind
+        scan = self.agent.latest_scan()
+        return scan is not None and scan[3]
 
     def front_range(self) -> float:
         """Distance ahead to the wall the latest fresh scan sees (control.front_distance), inf without one."""
