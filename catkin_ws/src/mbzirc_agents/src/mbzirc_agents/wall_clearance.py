@@ -15,7 +15,10 @@ Rules:
   hysteresis, so that a set-point is not re-sent for noise;
 - at least leg_guard.MIN_BEAMS returns make a wall (one stray return moves nothing);
 - without a trusted pose (pose source none: no GNSS fix, no valid localization) the same back-off is flown
-  as a velocity (`away_velocity`): it needs the returns about the robot only, not where it is.
+  as a velocity (`away_velocity`): it needs the returns about the robot only, not where it is;
+- a fire is watered square to the wall it burns on (`wall_normal_at`): the wall is the straight run of
+  returns within NORMAL_RADIUS of its estimate (WALL_NORMAL_MIN_POINTS, spread over WALL_NORMAL_MIN_SPAN m,
+  RMS under WALL_NORMAL_MAX_RMS: a corner is none), its normal the one on the robot's side.
 Pure geometry here (no ROS); the task's use of it is in tasks/indoor.py.
 """
 from __future__ import annotations
@@ -26,6 +29,12 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .leg_guard import MIN_BEAMS, corridor_distances
+
+NORMAL_RADIUS = 1.0            # m about a fire's estimate whose returns are its wall
+WALL_NORMAL_MIN_POINTS = 8
+WALL_NORMAL_MIN_SPAN = 0.8     # m
+WALL_NORMAL_MAX_RMS = 0.08     # m: straighter than this is one wall (two walls of a corner are not)
+WALL_NORMAL_MAX_OFF = 0.7      # m: the estimate lies no farther from the wall's line (else it is another wall)
 
 
 def wall_ahead(points: np.ndarray, here: Sequence[float], direction: Sequence[float], half_width: float,
@@ -98,3 +107,30 @@ def away_velocity(points: Optional[np.ndarray], min_clearance: float, margin: fl
 
 
 __all__ = ['away_velocity', 'back_off', 'off_the_walls', 'stop_short', 'wall_ahead']
+
+
+def wall_normal_at(points: Optional[np.ndarray], fire: Sequence[float], here: Sequence[float]
+                   ) -> Optional[np.ndarray]:
+    """The unit normal (x, y) of the wall the laser sees at the fire's estimate, pointing to here's side;
+    None without a fresh scan, or when the returns there are not one straight wall passing near the estimate.
+    Why (the on-demand rostest indoor_gnss_denied, 3 runs of 3): a watering pose on the line from where the
+    robot happened to be met the fire's wall at a grazing angle; the jet poured a whole tank beside the fire
+    on that wall while the camera saw it hot."""
+    if points is None or len(points) < WALL_NORMAL_MIN_POINTS:
+        return None
+    pts = np.asarray(points, dtype=float)[:, :2]
+    f = np.asarray(fire[:2], dtype=float)
+    near = pts[np.hypot(*(pts - f).T) <= NORMAL_RADIUS]
+    if len(near) < WALL_NORMAL_MIN_POINTS:
+        return None
+    centre = near.mean(axis=0)
+    _, sv, vt = np.linalg.svd(near - centre, full_matrices=False)
+    direction, normal = vt[0], vt[1]
+    along = (near - centre) @ direction
+    rms = float(sv[1]) / math.sqrt(len(near))
+    if np.ptp(along) < WALL_NORMAL_MIN_SPAN or rms > WALL_NORMAL_MAX_RMS \
+            or abs(float((f - centre) @ normal)) > WALL_NORMAL_MAX_OFF:
+        return None
+    if float((np.asarray(here[:2], dtype=float) - centre) @ normal) < 0.0:
+        normal = -normal
+    return normal

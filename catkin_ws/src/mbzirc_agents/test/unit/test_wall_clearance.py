@@ -8,7 +8,7 @@ import pytest
 
 from laser_world import ANGLE_MIN, INC, LaserScene, cast
 from mbzirc_arena.laser import scan_points
-from mbzirc_agents.wall_clearance import back_off, stop_short, wall_ahead
+from mbzirc_agents.wall_clearance import back_off, stop_short, wall_ahead, wall_normal_at
 from test_indoor_water import FIRE, scenes  # noqa: F401 - fixture: a UAV and its fire
 from test_leg_guard import Closest
 
@@ -47,6 +47,38 @@ def test_one_stray_return_moves_nothing():
     pts = np.array([[3.5, 0.0], [9.0, 9.0]])
     assert back_off(pts, (3.3, 0.0), 1.0, 0.2) is None
     assert stop_short(pts, (0.0, 0.0), (3.3, 0.0), 0.6, 1.5) is None
+
+
+def test_the_fires_wall_normal_points_to_the_robots_side_and_a_corner_has_none():
+    from laser_world import cast as ray
+    rng = np.random.default_rng(2)
+    pts = scan_points(ray((2.9, -2.5), 1.2, [WALL], 0.01, 0.01, 0.02, rng), ANGLE_MIN, INC, (2.9, -2.5, 0.0, 1.2),
+                      keep_near=True)
+    n = wall_normal_at(pts, FIRE, (2.9, -2.5))                 # seen at a slant: still the wall's own normal
+    assert n == pytest.approx((-1.0, 0.0), abs=0.03)
+    assert wall_normal_at(pts, (FIRE[0] + 1.2, 0.0), (2.9, -2.5)) is None     # the estimate off every wall
+    corner = [WALL, (-5.0, 0.0, FIRE[0] + 0.2, 0.2)]
+    pts = seen(2.5, -1.0, 0.5, corner)
+    assert wall_normal_at(pts, (FIRE[0], 0.0), (2.5, -1.0)) is None            # two walls: no one normal
+    assert wall_normal_at(None, FIRE, (2.0, 0.0)) is None
+
+
+def test_a_fire_approached_at_a_slant_is_watered_square_to_its_wall(scenes):
+    """The on-demand rostest indoor_gnss_denied (3 of 3 runs): the UAV found in1_e from a pose 15-20 deg off its
+    wall; the watering pose on the line from there met the wall at a grazing angle, and the whole tank went
+    beside the fire while the camera saw it hot. Now the watering pose faces the fire's wall squarely."""
+    sc = scenes(hot_until=2.0)
+    laser = LaserScene(sc.be, sc.ual, noisy=False)
+    laser.boxes = [WALL]
+    sc.threads = (laser,)
+    with sc.ual.lock:
+        sc.ual.pos[:2] = (FIRE[0] - 1.0, FIRE[1] - 3.5)        # 16 deg off the wall, on its side
+    sc.be.clock.sleep(0.5)
+    s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded', s.result.message
+    pos = sc.ual.pos
+    assert abs(pos[1] - FIRE[1]) < 0.3, f'watered from {pos[:2]}: not square to the wall (fire at {FIRE[:2]})'
+    assert abs(np.remainder(sc.ual.yaw + np.pi, 2 * np.pi) - np.pi) < 0.2
 
 
 class Drift:

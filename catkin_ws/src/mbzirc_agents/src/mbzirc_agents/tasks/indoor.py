@@ -17,7 +17,7 @@ from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
 from ..leg_guard import LegGuard, first_return_along, leg_blocked
-from ..wall_clearance import off_the_walls, stop_short, wall_ahead
+from ..wall_clearance import off_the_walls, stop_short, wall_ahead, wall_normal_at
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
 from .explore import Exploration, footprint_here
@@ -613,6 +613,9 @@ class ExtinguishIndoorFire(AgentTask):
         self._clear_of_walls_first()
         here = a.position()
         frm = (here[0], here[1], fire[2] if a.ROBOT_TYPE == 'uav' else here[2])
+        normal = wall_normal_at(self._wall_points(), fire, here)
+        if normal is not None:                           # square to the fire's wall, on the robot's side
+            frm = (fire[0] + normal[0], fire[1] + normal[1], frm[2])
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
         pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
