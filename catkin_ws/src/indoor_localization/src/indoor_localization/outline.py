@@ -58,6 +58,7 @@ class Face:
     normal: tuple
     offset: float
     top: float                   # m: the wall stands up to its building's roof
+    end: bool = False            # a corner's virtual face: across a wall's line through its end (`corner_ends`)
 
     @property
     def direction(self) -> float:
@@ -79,6 +80,33 @@ def outline_faces(footprints: Sequence[Sequence[float]]) -> list:
                   Face(k, "south", (x0, y0), (x1, y0), (0.0, -1.0), -y0, top),
                   Face(k, "north", (x0, y1), (x1, y1), (0.0, 1.0), y1, top)]
     return faces
+
+
+def _on_segment(p: tuple, f: Face, tol: float = 0.05) -> bool:
+    ax, ay = f.a
+    dx, dy = f.b[0] - ax, f.b[1] - ay
+    t = max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / max(dx * dx + dy * dy, 1e-12)))
+    return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy) <= tol
+
+
+def corner_ends(faces: Sequence[Face]) -> dict:
+    """{(face index, 0 or 1): virtual Face} for the ends (a, b) of every face that are corners of the whole
+    outline: no face of another building touches them (where the extension meets the tower, facade A's line
+    goes on along the extension's: no corner there). The virtual face lies across the wall's line through
+    the end, its normal along the wall, outwards past the end: an end seen is an offset of that face."""
+    out = {}
+    for k, f in enumerate(faces):
+        for i, (e, other) in enumerate(((f.a, f.b), (f.b, f.a))):
+            if any(g.building != f.building and _on_segment(e, g) for g in faces):
+                continue
+            ux, uy = e[0] - other[0], e[1] - other[1]
+            n = math.hypot(ux, uy)
+            if n < 1e-6:
+                continue
+            ux, uy = ux / n, uy / n
+            out[(k, i)] = Face(f.building, f"{f.name} {'a' if i == 0 else 'b'} end", e, e, (ux, uy),
+                               ux * e[0] + uy * e[1], f.top, end=True)
+    return out
 
 
 def theil_sen(u: np.ndarray, v: np.ndarray, samples: int = 40) -> np.ndarray:
@@ -107,6 +135,9 @@ class RefineParams:
     gate: float = 0.3                # m once observed (plus 3 std of the prediction)
     side_gate: float = 1.2           # m: a robot this close to a wall's line may be on either side of it
     look_beyond: float = 3.0         # m beyond a wall's predicted line where no surface may stand
+    corner_ends: bool = True         # outside, a face's end at a corner of the outline is observed too
+    end_max_range: float = 15.0      # m: an end farther from the robot is not observed (range, beam spacing)
+    end_coverage: float = 0.75       # share of the last metre's 0.25 m stretches holding returns up to an end
     surface_points: int = 5          # returns in a band parallel to a wall that make a surface ...
     surface_spread: float = 1.0      # m ... spread over this much of its length (not a window's reveal)
     min_points: int = 15             # returns supporting a wall line
@@ -158,8 +189,13 @@ class OutlineRefiner:
     refinement to compose on the anchor. `events` says what a node should log."""
 
     def __init__(self, faces: Sequence[Face], params: RefineParams = RefineParams()):
-        self.faces = list(faces)
+        self.faces = [f for f in faces if not f.end]
         self.p = params
+        self.ends: dict = {}             # (face, 0 or 1) -> index of its corner end's virtual face in faces
+        if params.corner_ends:
+            for key, virtual in corner_ends(self.faces).items():
+                self.ends[key] = len(self.faces)
+                self.faces.append(virtual)
         self.walls: dict = {}            # (face, inner) -> deque of WallObservation
         self.dropped: set = set()        # walls the last fit dropped as inconsistent
         self.correction = self._no_correction()
@@ -215,10 +251,17 @@ class OutlineRefiner:
         pts = transform(in_map, refined.theta, refined.tx, refined.ty)
         found = []
         for k, inner in self._visible_faces(robot, z):
-            obs = self._observe(t, k, inner, pts, in_map, refined)
-            if obs is not None:
-                found.append(obs)
-                self.walls.setdefault((k, inner), deque(maxlen=self.p.observations_per_wall)).append(obs)
+            seen = self._observe(t, k, inner, pts, in_map, refined)
+            if seen is None:
+                continue
+            obs, inliers = seen
+            made = [((k, inner), obs)]
+            if not inner:
+                made += [((e.face, False), e) for e in self._observe_ends(t, k, obs, inliers, pts, in_map,
+                                                                          refined, robot)]
+            for key, o in made:
+                found.append(o)
+                self.walls.setdefault(key, deque(maxlen=self.p.observations_per_wall)).append(o)
         if found:
             self._fit(anchor)
         return found
@@ -228,7 +271,7 @@ class OutlineRefiner:
         roof), that building's inner faces; outside, the outer faces turned towards it. A wall whose line
         the robot is within the gate of (in its window: which side the robot is on is not clear) is left
         out, and does not decide inside or outside; the others still count (from a window, the room)."""
-        standing = [k for k, f in enumerate(self.faces) if f.top > z]
+        standing = [k for k, f in enumerate(self.faces) if f.top > z and not f.end]
         side = {k: self._side(k, robot) for k in standing}
         clear = {k for k in standing if not (abs(side[k]) < min(self._gate(k, False), self.p.side_gate)
                                              and -0.5 < self._along(self.faces[k], np.array([robot]))[0]
@@ -269,7 +312,9 @@ class OutlineRefiner:
         d = pts @ np.array(f.normal) - line
         along = self._along(f, pts)
         gate = self._gate(k, inner)
-        on_wall = (along > -0.3) & (along < f.length + 0.3)
+        # past a corner end (outside), as far as that end may be off: its returns are the wall's
+        ext = [self._gate(self.ends[(k, i)], False) if not inner and (k, i) in self.ends else 0.3 for i in (0, 1)]
+        on_wall = (along > -ext[0]) & (along < f.length + ext[1])
         looked = on_wall & (d > -gate) & (d < max(gate, p.look_beyond))
         if looked.sum() < p.min_points:
             return None
@@ -283,7 +328,8 @@ class OutlineRefiner:
         # (a perpendicular interior wall meeting this one spreads its returns across the gate; the yaw
         # error tilts the wall's), then trimmed total least squares
         keep = np.abs(d[sel] - theil_sen(along[sel], d[sel])) < max(0.5 * p.gate, 0.1)
-        q = in_map[sel][keep]
+        idx = np.flatnonzero(sel)[keep]
+        q = in_map[idx]
         for _ in range(3):
             if len(q) < p.min_points:
                 return None
@@ -293,7 +339,7 @@ class OutlineRefiner:
             inl = np.abs(res) < 3.0 * max(1.4826 * float(np.median(np.abs(res))), 0.01)
             if inl.all():
                 break
-            q = q[inl]
+            q, idx = q[inl], idx[inl]
         else:
             if len(q) < p.min_points:
                 return None
@@ -309,8 +355,77 @@ class OutlineRefiner:
                 or abs(off_angle) > p.max_line_angle):
             return None
         rms = max(rms, 0.005)
-        return WallObservation(t, k, inner, (float(centroid[0]), float(centroid[1])), angle, len(q),
-                               rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3))
+        return (WallObservation(t, k, inner, (float(centroid[0]), float(centroid[1])), angle, len(q),
+                                rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3)), idx)
+
+    def _observe_ends(self, t: float, k: int, line: WallObservation, inliers: np.ndarray, pts: np.ndarray,
+                      in_map: np.ndarray, refined: Anchor, robot: tuple) -> list:
+        """The corner ends of outer face k seen in this scan (arena frame pts, map frame in_map; `inliers`:
+        the indices of its line's returns), as observations of their virtual faces. Rules: an end is where
+        the line's returns stop within the end's gate of where the anchor predicts it, with returns in
+        `end_coverage` of the last metre's stretches before it, none on the line for a metre past it (the
+        wall goes on: not its end) and none nearer than the line in the bearings of that metre (something in
+        front hides it: the returns stop at its shadow), within `end_max_range` of the robot. Placed half the
+        last returns' spacing past the last one (the beam spacing at that range and slant), that much its
+        std. Why: from outside, the facade gives its normal only; the GNSS error along it (0.5-1.8 m at the
+        windows in the explore + GNSS-denied benchmark, 108-113) came in with the robot and was the largest
+        SLAM error of every flight."""
+        p, f = self.p, self.faces[k]
+        out = []
+        n = np.array(f.normal)
+        u = np.array([f.b[0] - f.a[0], f.b[1] - f.a[1]]) / f.length
+        along = (pts - np.array(f.a)) @ u
+        d = pts @ n - f.offset
+        s_line, d_line = along[inliers], float(np.median(d[inliers]))
+        for i in (0, 1):
+            vk = self.ends.get((k, i))
+            if vk is None:
+                continue
+            sign = 1.0 if i == 1 else -1.0                  # along the wall, outwards past this end
+            s = sign * s_line                               # so that the end is the largest
+            s_end_pred = sign * (f.length if i == 1 else 0.0)
+            last = int(np.argmax(s))
+            s_last = float(s[last])
+            if abs(s_last - s_end_pred) > self._gate(vk, False):
+                continue
+            end_xy = np.array(f.a) + u * sign * s_last + n * d_line
+            if math.hypot(end_xy[0] - robot[0], end_xy[1] - robot[1]) > p.end_max_range:
+                continue
+            bins = np.unique(np.floor((s_last - s[s > s_last - 1.0]) / COVERAGE_BIN)).size
+            if bins < p.end_coverage * (1.0 / COVERAGE_BIN):
+                continue
+            sa = sign * along
+            past = (sa > s_last + 0.1) & (sa < s_last + 1.0)
+            if np.any(past & (np.abs(d - d_line) < 0.5)):
+                continue                                    # the wall goes on past it
+            if self._hidden(robot, pts, [np.array(f.a) + u * sign * (s_last + x) + n * d_line for x in (0.1, 1.0)]):
+                continue
+            gaps = np.diff(np.sort(s[s > s_last - 1.0]))
+            half = min(0.5 * float(np.median(gaps[-3:])) if gaps.size else 0.1, 0.3)
+            last_map = in_map[inliers[last]]
+            u_map = np.array([math.cos(-refined.theta) * u[0] - math.sin(-refined.theta) * u[1],
+                              math.sin(-refined.theta) * u[0] + math.cos(-refined.theta) * u[1]])
+            at = last_map + u_map * sign * half
+            out.append(WallObservation(t, vk, False, (float(at[0]), float(at[1])), 0.0, 1,
+                                       max(half, 0.03), math.inf))
+        return out
+
+    @staticmethod
+    def _hidden(robot: tuple, pts: np.ndarray, segment: list) -> bool:
+        """True when a return lies nearer to the robot than the segment (arena, two points) in the bearings
+        that the segment covers: something in front of it."""
+        r = np.asarray(robot[:2], dtype=float)
+        b = [math.atan2(q[1] - r[1], q[0] - r[0]) for q in segment]
+        lo, width = b[0], wrap_angle(b[1] - b[0])
+        if width < 0:
+            lo, width = b[1], -width
+        rel = pts - r
+        bearing = np.arctan2(rel[:, 1], rel[:, 0])
+        within = ((bearing - lo) % (2 * math.pi)) <= width
+        if not within.any():
+            return False
+        nearest_seg = min(float(np.hypot(*(q - r))) for q in segment)
+        return bool(np.any(np.hypot(rel[within, 0], rel[within, 1]) < nearest_seg - 0.3))
 
     def _outermost_surface(self, d: np.ndarray, along: np.ndarray) -> Optional[float]:
         """The offset of the outermost surface parallel to a wall among returns at offsets d (> 0 outwards)
