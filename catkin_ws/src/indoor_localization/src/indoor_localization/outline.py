@@ -32,12 +32,14 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from mbzirc_arena.buildings import dist_point_segment
 from mbzirc_arena.yaw import wrap_angle
 
 from .anchor import Anchor, compose
 
 IDENTITY = Anchor(0.0, 0.0, 0.0)
 COVERAGE_BIN = 0.25          # m: bins along a wall line when measuring how the returns spread along it
+CORNER_TOUCH = 0.05          # m: a face's end this near another building's face is no corner of the outline
 SURFACE_BIN = 0.1            # m: bands parallel to a wall when looking for its outermost surface
 SURFACE_DEPTH = 0.6          # m: returns this far in from the outermost surface may belong to it (a wall
                              # tilted by the anchor's yaw error spreads over a band this deep)
@@ -82,13 +84,6 @@ def outline_faces(footprints: Sequence[Sequence[float]]) -> list:
     return faces
 
 
-def _on_segment(p: tuple, f: Face, tol: float = 0.05) -> bool:
-    ax, ay = f.a
-    dx, dy = f.b[0] - ax, f.b[1] - ay
-    t = max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / max(dx * dx + dy * dy, 1e-12)))
-    return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy) <= tol
-
-
 def corner_ends(faces: Sequence[Face]) -> dict:
     """{(face index, 0 or 1): virtual Face} for the ends (a, b) of every face that are corners of the whole
     outline: no face of another building touches them (where the extension meets the tower, facade A's line
@@ -97,7 +92,7 @@ def corner_ends(faces: Sequence[Face]) -> dict:
     out = {}
     for k, f in enumerate(faces):
         for i, (e, other) in enumerate(((f.a, f.b), (f.b, f.a))):
-            if any(g.building != f.building and _on_segment(e, g) for g in faces):
+            if any(g.building != f.building and dist_point_segment(e, g.a, g.b) <= CORNER_TOUCH for g in faces):
                 continue
             ux, uy = e[0] - other[0], e[1] - other[1]
             n = math.hypot(ux, uy)
@@ -257,8 +252,8 @@ class OutlineRefiner:
             obs, inliers = seen
             made = [((k, inner), obs)]
             if not inner:
-                made += [((e.face, False), e) for e in self._observe_ends(t, k, obs, inliers, pts, in_map,
-                                                                          refined, robot)]
+                made += [((e.face, False), e) for e in self._observe_ends(t, k, inliers, pts, in_map, refined,
+                                                                          robot)]
             for key, o in made:
                 found.append(o)
                 self.walls.setdefault(key, deque(maxlen=self.p.observations_per_wall)).append(o)
@@ -358,8 +353,8 @@ class OutlineRefiner:
         return (WallObservation(t, k, inner, (float(centroid[0]), float(centroid[1])), angle, len(q),
                                 rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3)), idx)
 
-    def _observe_ends(self, t: float, k: int, line: WallObservation, inliers: np.ndarray, pts: np.ndarray,
-                      in_map: np.ndarray, refined: Anchor, robot: tuple) -> list:
+    def _observe_ends(self, t: float, k: int, inliers: np.ndarray, pts: np.ndarray, in_map: np.ndarray,
+                      refined: Anchor, robot: tuple) -> list:
         """The corner ends of outer face k seen in this scan (arena frame pts, map frame in_map; `inliers`:
         the indices of its line's returns), as observations of their virtual faces. Rules: an end is where
         the line's returns stop within the end's gate of where the anchor predicts it, with returns in
@@ -374,7 +369,7 @@ class OutlineRefiner:
         out = []
         n = np.array(f.normal)
         u = np.array([f.b[0] - f.a[0], f.b[1] - f.a[1]]) / f.length
-        along = (pts - np.array(f.a)) @ u
+        along = self._along(f, pts)
         d = pts @ n - f.offset
         s_line, d_line = along[inliers], float(np.median(d[inliers]))
         for i in (0, 1):
@@ -391,7 +386,8 @@ class OutlineRefiner:
             end_xy = np.array(f.a) + u * sign * s_last + n * d_line
             if math.hypot(end_xy[0] - robot[0], end_xy[1] - robot[1]) > p.end_max_range:
                 continue
-            bins = np.unique(np.floor((s_last - s[s > s_last - 1.0]) / COVERAGE_BIN)).size
+            tail = np.sort(s[s > s_last - 1.0])                # the line's returns of its last metre
+            bins = np.unique(np.floor((s_last - tail) / COVERAGE_BIN)).size
             if bins < p.end_coverage * (1.0 / COVERAGE_BIN):
                 continue
             sa = sign * along
@@ -400,11 +396,10 @@ class OutlineRefiner:
                 continue                                    # the wall goes on past it
             if self._hidden(robot, pts, [np.array(f.a) + u * sign * (s_last + x) + n * d_line for x in (0.1, 1.0)]):
                 continue
-            gaps = np.diff(np.sort(s[s > s_last - 1.0]))
+            gaps = np.diff(tail)
             half = min(0.5 * float(np.median(gaps[-3:])) if gaps.size else 0.1, 0.3)
             last_map = in_map[inliers[last]]
-            u_map = np.array([math.cos(-refined.theta) * u[0] - math.sin(-refined.theta) * u[1],
-                              math.sin(-refined.theta) * u[0] + math.cos(-refined.theta) * u[1]])
+            u_map = transform(u[None, :], -refined.theta, 0.0, 0.0)[0]      # the wall's direction, map frame
             at = last_map + u_map * sign * half
             out.append(WallObservation(t, vk, False, (float(at[0]), float(at[1])), 0.0, 1,
                                        max(half, 0.03), math.inf))

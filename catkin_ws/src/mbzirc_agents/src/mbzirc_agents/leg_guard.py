@@ -22,7 +22,7 @@ Rules:
 - without a fresh scan the leg goes on (a throttled error says so): the guard adds a check, it is not
   what moves the robot; a blind laser (a fresh scan whose every beam is NaN: no measurement at all, unlike
   +inf, nothing within range) blocks the leg: the walls it would see are unknown.
-Pure geometry here (no ROS): `corridor_distances`, `first_return_along`, `blocking_distance` (the scan's returns: mbzirc_arena's
+Pure geometry here (no ROS): `corridor_distances`, `blocking_distance` (the scan's returns: mbzirc_arena's
 `laser.scan_points` with keep_near, REP 117); `LegGuard` is a
 task's use of it (its scan subscription and the check passed to `RobotAgent.move_to`'s stop_when).
 """
@@ -69,14 +69,6 @@ def corridor_distances(points: np.ndarray, origin: Sequence[float], direction: S
     aside = rel @ np.array([-u[1], u[0]])
     keep = (along > 0.0) & (along <= reach) & (np.abs(aside) <= half_width)
     return along[keep]
-
-
-def first_return_along(points: np.ndarray, origin: Sequence[float], bearing: float, half_width: float = 0.15,
-                       reach: float = 30.0) -> float:
-    """Distance from origin to the nearest return within half_width of the ray at `bearing` (rad, arena),
-    inf when none lies on it within reach (an opening, or nothing in range)."""
-    ahead = corridor_distances(points, origin, (math.cos(bearing), math.sin(bearing)), half_width, reach)
-    return float(ahead.min()) if ahead.size else math.inf
 
 
 def blocking_distance(points: np.ndarray, here: Sequence[float], target: Sequence[float], half_width: float,

@@ -22,7 +22,7 @@ def standing_at(p: Sequence[float], footprints: Sequence[Sequence[float]], clear
     return [b for b in footprints if b[4] > p[2] - clearance]
 
 
-def _dist_point_segment(p, a, b) -> float:
+def dist_point_segment(p, a, b) -> float:
     """Distance in the plane from p to the segment a-b."""
     ax, ay, bx, by = a[0], a[1], b[0], b[1]
     dx, dy = bx - ax, by - ay
@@ -41,7 +41,7 @@ def nearest_face(p: Sequence[float], footprints: Sequence[Sequence[float]]) -> t
         x0, y0, x1, y1 = b[:4]
         for normal, a, c in (((-1.0, 0.0), (x0, y0), (x0, y1)), ((1.0, 0.0), (x1, y0), (x1, y1)),
                              ((0.0, -1.0), (x0, y0), (x1, y0)), ((0.0, 1.0), (x0, y1), (x1, y1))):
-            d = _dist_point_segment(p, a, c)
+            d = dist_point_segment(p, a, c)
             if d < best[1] - 1e-9:
                 best = (normal, d)
     return best
@@ -60,7 +60,7 @@ def open_face(p: Sequence[float], footprints: Sequence[Sequence[float]], distanc
                              ((0.0, -1.0), (x0, y0), (x1, y0)), ((0.0, 1.0), (x0, y1), (x1, y1))):
             fx = min(max(p[0], min(a[0], c[0])), max(a[0], c[0]))
             fy = min(max(p[1], min(a[1], c[1])), max(a[1], c[1]))
-            faces.append((_dist_point_segment(p, a, c), normal, (fx, fy)))
+            faces.append((dist_point_segment(p, a, c), normal, (fx, fy)))
     if not faces:
         return None, None
     faces.sort(key=lambda f: f[0])

@@ -16,7 +16,7 @@ from std_msgs.msg import Float64MultiArray
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..geometry import facing_pose
-from ..leg_guard import LegGuard, first_return_along, leg_blocked
+from ..leg_guard import LegGuard, leg_blocked
 from ..wall_clearance import off_the_walls, stop_short, wall_ahead, wall_normal_at
 from .cold_check import NOT_SEEN_HOT, ColdConfirmation, Soak, WaterFlow, dry_tank_verdict
 from .common import fire_position, floor_of, parse_fire, parse_floor, parse_path, parse_pose
@@ -41,6 +41,8 @@ LOOK_TURN = 0.5            # rad of a look beside the heading for a fire out of 
 LOOK_CLIMB = 0.5           # m of a UAV's look above and below the watering height for it
 LOOK_MIN_RISE = 5.0        # x ~out_contrast a warm area found beside the watering pose's view stands over its wall
 LOOK_MAX_OFF = 1.5         # m from the fire's estimate where the laser may place a warm area found beside the view
+LOOK_RAY_HALF_WIDTH = 0.15  # m either side of a warm area's bearing where the laser's returns place it ...
+LOOK_RAY_REACH = 30.0      # m ... up to this far
 STANDOFF_SLACK = 0.25      # m nearer than ~indoor_fire_distance to the wall ahead before a UAV steps back to it
 
 
@@ -546,8 +548,8 @@ class ExtinguishIndoorFire(AgentTask):
 
     def _off_the_fire(self, spot, then) -> Optional[str]:
         """Why the laser places a thermal spot (seen from pose `then`) where the fire cannot be, or None: the
-        first return along its bearing lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none
-        (an opening). Unchecked (None) without a fresh scan or an estimate. Why (explore + GNSS-denied seed
+        wall along its bearing (wall_clearance.wall_ahead, in a corridor LOOK_RAY_HALF_WIDTH either side)
+        lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none (an opening). Unchecked (None) without a fresh scan or an estimate. Why (explore + GNSS-denied seed
         106): in1_w, 98 % out and too faint to see, stands beside a window; four top-ups each took the
         warmest area in their looks, 33 deg off, the sun-heated outside seen through the window, and poured
         their whole tank there."""
@@ -555,8 +557,8 @@ class ExtinguishIndoorFire(AgentTask):
         if points is None or self.fire_xy is None:
             return None
         bearing = float(then[3]) + pixel_bearing(spot.column, self.agent.p.forward_camera_fov)
-        r = first_return_along(points, then[:2], bearing)
-        if math.isinf(r):
+        r = wall_ahead(points, then[:2], (math.cos(bearing), math.sin(bearing)), LOOK_RAY_HALF_WIDTH, LOOK_RAY_REACH)
+        if r is None:
             return 'no laser return along it (an opening)'
         place = np.array(then[:2], dtype=float) + r * np.array([math.cos(bearing), math.sin(bearing)])
         off = float(np.linalg.norm(place - self.fire_xy))
