@@ -266,28 +266,13 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     start = grid.cell(here[0], here[1])
     if start is None:
         return None
-    clear = grid.clearance()
-    narrow = clearance if pass_clearance is None else min(pass_clearance, clearance)
-    ok = grid.standable(clearance, here=start, clear=clear)
-    passable = grid.standable(narrow, here=start, clear=clear)
-    outline = grid.to_outline()
-    room = max(outline_clearance, clearance)
-    inside = outline >= room - 1e-9   # no doorway to pass there
-    inside[start] = True
-    ok &= inside
-    passable &= inside
-    out_of_room = way_out(grid, start, clear, outline, narrow, room) & ~passable
-    passable |= out_of_room
+    space = _Walkable(grid, start, clearance, pass_clearance, outline_clearance, skip)
+    ok, passable, clear, banned = space.ok, space.passable, space.clear, space.banned
     origin = grid.cell(sight_of[0], sight_of[1]) if sight_of is not None else None
     in_sight = ok.copy()
     if origin is not None:
         in_sight[origin] = True
-    banned = {grid.cell(p[0], p[1]) for p in skip} - {None, start}
-    for c in banned:             # neither a target nor a cell to pass: a leg to it was found blocked
-        ok[c] = passable[c] = False
-    cost = 1.0 + NARROW_COST * np.clip((clearance - clear) / max(clearance - narrow, 1e-6), 0.0, 1.0)
-    cost[out_of_room] = 1.0 + 2 * NARROW_COST
-    parent, costs = paths_from(passable, start, cost)
+    parent, costs = paths_from(passable, start, space.cost)
     targets = [c for group in frontiers(grid, passable, min_frontier) for c in group]
     if view_range > 0:
         targets += unviewed(grid, passable, viewed, view_range)
@@ -306,15 +291,70 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
             best = (rank, c)
     if best is None:
         return None
-    cells, c = [], best[1]
-    while c is not None:
-        cells.append(c)
-        c = parent[c]
-    cells.reverse()
-    on_path = ok.copy()
-    for i, j in cells:           # a leg may pass narrow cells only beside the path's own
-        on_path[max(0, i - 1):i + 2, max(0, j - 1):j + 2] |= passable[max(0, i - 1):i + 2, max(0, j - 1):j + 2]
-    return [grid.centre(c) for c in straight_legs(grid, on_path, cells, ends=ok)]
+    return space.legs(parent, best[1])
+
+
+def route_to(grid: FloorGrid, here: Sequence[float], goal: Sequence[float], clearance: float,
+             pass_clearance: Optional[float] = None, outline_clearance: float = 0.0,
+             skip: Iterable = ()) -> Optional[list]:
+    """The legs [(x, y), ...] from here to goal over the sensed free space, kept and costed as next_viewpoint's
+    (the goal's own cell counts as standable: the robot stood there), or None when no way is known. Why
+    (realistic seed 112 with exploration, GNSS denied): going back to where the search started along the
+    points it had visited took a UAV to one where a leg had been blocked, beside a doorway's jamb; held
+    there, it left from the doorway and climbed to its window's height into the doorway's top."""
+    start, end = grid.cell(here[0], here[1]), grid.cell(goal[0], goal[1])
+    if start is None or end is None:
+        return None
+    if start == end:
+        return []
+    space = _Walkable(grid, start, clearance, pass_clearance, outline_clearance, skip)
+    space.ok[end] = space.passable[end] = True
+    parent, _ = paths_from(space.passable, start, space.cost)
+    if end not in parent:
+        return None
+    legs = space.legs(parent, end)
+    if legs:
+        legs[-1] = (float(goal[0]), float(goal[1]))   # the goal itself, not its cell's centre
+    return legs
+
+
+class _Walkable:
+    """Where a robot at `start` may stand (ok) and pass (passable), what a step costs, by the rules of the
+    module's docstring: shared by next_viewpoint and route_to."""
+
+    def __init__(self, grid: FloorGrid, start: Cell, clearance: float, pass_clearance: Optional[float],
+                 outline_clearance: float, skip: Iterable) -> None:
+        self.grid = grid
+        clear = self.clear = grid.clearance()
+        narrow = clearance if pass_clearance is None else min(pass_clearance, clearance)
+        ok = self.ok = grid.standable(clearance, here=start, clear=clear)
+        passable = self.passable = grid.standable(narrow, here=start, clear=clear)
+        outline = grid.to_outline()
+        room = max(outline_clearance, clearance)
+        inside = outline >= room - 1e-9   # no doorway to pass there
+        inside[start] = True
+        ok &= inside
+        passable &= inside
+        out_of_room = way_out(grid, start, clear, outline, narrow, room) & ~passable
+        passable |= out_of_room
+        self.banned = {grid.cell(p[0], p[1]) for p in skip} - {None, start}
+        for c in self.banned:        # neither a target nor a cell to pass: a leg to it was found blocked
+            ok[c] = passable[c] = False
+        self.cost = 1.0 + NARROW_COST * np.clip((clearance - clear) / max(clearance - narrow, 1e-6), 0.0, 1.0)
+        self.cost[out_of_room] = 1.0 + 2 * NARROW_COST
+
+    def legs(self, parent: dict, end: Cell) -> list:
+        """The straight legs (cell centres) of the cheapest path to end (paths_from's parents)."""
+        cells, c = [], end
+        while c is not None:
+            cells.append(c)
+            c = parent[c]
+        cells.reverse()
+        on_path = self.ok.copy()
+        for i, j in cells:           # a leg may pass narrow cells only beside the path's own
+            sl = (slice(max(0, i - 1), i + 2), slice(max(0, j - 1), j + 2))
+            on_path[sl] |= self.passable[sl]
+        return [self.grid.centre(c) for c in straight_legs(self.grid, on_path, cells, ends=self.ok)]
 
 
 def way_out(grid: FloorGrid, start: Cell, clear: np.ndarray, outline: np.ndarray, pass_clearance: float,

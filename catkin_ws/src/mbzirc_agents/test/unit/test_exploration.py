@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from laser_world import ANGLE_MIN, INC, cast
-from mbzirc_agents.exploration import CLEAR_SCANS, FREE, OCCUPIED, UNKNOWN, FloorGrid, next_viewpoint
+from mbzirc_agents.exploration import CLEAR_SCANS, FREE, OCCUPIED, UNKNOWN, FloorGrid, next_viewpoint, route_to
 
 OUTLINE = (11.4, 6.7, 24.2, 19.5)     # the tower's public footprint
 T = 0.2
@@ -89,6 +89,30 @@ def test_in_sight_stays_in_the_room_of_the_window():
     for v in visited:
         assert 11.6 < v[0] < 17.7 and 6.9 < v[1] < 15.0, v            # the south-west room
         assert not crosses(start, v, walls, half=0.0)
+
+
+@pytest.mark.parametrize('plan, start, held', [
+    (PLAN_A, (13.1, 12.5), (17.8, 11.0)),      # realistic seed 112: held in the doorway of the wall x 17.7
+    (PLAN_B, (14.25, 7.8), (21.0, 12.1)),      # another floor plan: held in the doorway of the wall y 12
+])
+def test_the_way_back_to_the_start_is_planned_on_the_free_space_from_where_a_leg_was_held(plan, start, held):
+    """Realistic seed 112 with exploration: back to where the search started along the points visited, a
+    UAV was held beside a doorway's jamb (a point where a leg had been held before) and left from there. The
+    way back is a route over the free space from wherever the robot is: legs that keep off every wall, ending
+    on the start itself; none through space never seen."""
+    walls = outer_walls() + plan
+    grid, _ = explore(walls, start)
+    legs = route_to(grid, held, start, 0.8, 0.6)
+    assert legs and legs[-1] == pytest.approx(start), legs
+    here = held
+    for leg in legs:
+        assert not crosses(here, leg, walls, half=0.25), (here, leg)
+        here = leg
+    assert route_to(grid, start, start, 0.8, 0.6) == []
+    unseen = FloorGrid(OUTLINE, 0.25)
+    unseen.add_scan(start, scan_points(start, walls))
+    assert route_to(unseen, start, (22.5, 17.5), 0.8, 0.6) is None      # behind walls never seen through
+    assert route_to(grid, (0.0, 0.0), start, 0.8) is None                 # outside the footprint
 
 
 def test_an_occupied_cell_stays_occupied_and_a_window_frees_only_the_outline():

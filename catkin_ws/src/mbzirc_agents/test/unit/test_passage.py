@@ -662,17 +662,44 @@ def searched_from(ual, be, pos, yaw, floor, path):
     return track
 
 
-def test_an_indoor_leg_climbing_to_a_window_changes_height_where_the_uav_is(uav):
+def test_realistic_103_106_an_indoor_leg_climbing_to_a_window_goes_along_low_then_up(uav):
     """Realistic seeds 103 and 106: leaving floor 1 from a viewpoint at the fire's height (1.4 m above the
     floor) for the window's 2.5 m, a diagonal leg took the UAV to the facade's inner face below the sill,
-    its laser plane looking through the window above the wall it hit. The height comes first, where the
-    UAV is; then the leg, in the plane the laser sees."""
+    its laser plane looking through the window above the wall it hit. Rule: no diagonal; a leg up to a point
+    inside goes along at the UAV's height (the plane its laser sees), then up at its end."""
     agent, ual, be, scene = uav
     track = searched_from(ual, be, (15.7, 10.5, 6.4), -math.pi / 2, 1,     # a viewpoint on floor 1, west room
                           [goal_pose(15.7, 8.9, 7.6, -math.pi / 2)])
-    low = [p for p in track if p[2] < 7.6 - 0.3]
-    assert low and max(abs(p[1] - 10.5) for p in low) < 0.3, 'moved along the leg before climbing'
+    high = [p for p in track if p[2] > 6.4 + 0.3]
+    assert high and max(abs(p[1] - 8.9) for p in high) < 0.3, 'climbed before going along the leg'
     assert abs(ual.pos[2] - 7.6) < 0.2 and abs(ual.pos[1] - 8.9) < 0.3, ual.pos
+
+
+# the default world's floor 1 (test-only data): an interior wall x = 17.7..17.9, its doorway at y 10-12 up to
+# 2.2 m above the floor (z 7.2), which no laser in the plane below it sees
+DOORWAY_1 = (17.7, 10.0, 17.9, 12.0, 7.2)
+
+
+def floor_1_with_a_doorway(z):
+    x0, y0, x1, y1, top = DOORWAY_1
+    inner = [(x0, 6.9, x1, y0), (x0, y1, x1, 19.3)] + ([(x0, y0, x1, y1)] if z >= top else [])
+    return wall_boxes(z) + inner
+
+
+def test_realistic_112_a_uav_held_in_a_doorway_leaves_below_its_top_and_climbs_where_it_came_down(uav):
+    """Realistic seed 112 with exploration, GNSS denied indoors: UAV 3's way back from exploring floor 1 was
+    held by its leg guard in the doorway of the interior wall x 17.7; the way out's first point was where it
+    had come down from its window, 2.5 m above the floor, and its go-to climbed to that height first, where
+    it was: into the doorway's top (2.2 m above the floor, above the laser's plane). Along at its height
+    first, up at the leg's end: its frame never reaches the doorway's top."""
+    agent, ual, be, scene = uav
+    scene.shift = (0.0, 0.0)
+    scene.boxes = floor_1_with_a_doorway
+    track = searched_from(ual, be, (17.6, 11.1, 6.5), math.pi, 1, [goal_pose(13.9, 12.5, 7.5, math.pi)])
+    x0, y0, x1, y1, top = DOORWAY_1
+    under_top = [p for p in track if x0 - UAV_R < p[0] < x1 + UAV_R and y0 - UAV_R < p[1] < y1 + UAV_R]
+    assert under_top and max(p[2] for p in under_top) + 0.15 + UAV_R < top, max(p[2] for p in under_top)
+    assert math.dist(ual.pos[:2], (13.9, 12.5)) < 0.3 and abs(ual.pos[2] - 7.5) < 0.2, ual.pos
 
 
 def test_realistic_105_112_a_uav_just_inside_a_window_goes_in_before_going_down(uav):

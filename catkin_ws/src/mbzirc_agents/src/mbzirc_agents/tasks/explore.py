@@ -29,8 +29,10 @@ Rules:
   blocked legs the exploration ends;
 - ~explore_in_sight (UAVs: they leave through the window they came in by a straight leg) keeps the
   viewpoints in straight sight of the first one;
-- the exploration ends after ~explore_budget s; without a fire the robot goes back along its viewpoints to
-  the first one (legs it has travelled), where the caller's way out starts.
+- the exploration ends after ~explore_budget s; without a fire the robot goes back to the first viewpoint,
+  where the caller's way out starts, along the grid's free space (the same clearances as a viewpoint's
+  legs; a blocked leg: a new route from where it was held), or, with no route known, along the points it
+  visited.
 """
 from __future__ import annotations
 
@@ -46,12 +48,13 @@ from mbzirc_arena.c3 import ARENA
 
 from .. import constants as C
 from ..agent_task import TaskError
-from ..exploration import FloorGrid, headings_to_watch, next_viewpoint, wall_bearings, watch
+from ..exploration import FloorGrid, headings_to_watch, next_viewpoint, route_to, wall_bearings, watch
 from ..leg_guard import LegGuard
 from .uav_motion import facade_room, off_the_facades
 
 
 MAX_BLOCKED_LEGS = 6     # legs found blocked before the exploration ends (the laser sees what the grid does not)
+MAX_ROUTES_BACK = 3      # routes back to the start tried (each from where the last was blocked) before retracing
 
 
 def expected_fire_height(arena=ARENA) -> float:
@@ -213,16 +216,36 @@ class Exploration:
         return tuple(self.task.passage.doorway(target))
 
     def go_back(self) -> None:
-        """Back along the visited points (legs it travelled) to where the exploration started, at the
-        exploration's height (the caller's way out changes height first)."""
+        """Back to where the exploration started, at the exploration's height (the caller's way out changes
+        height there, where the UAV came down): along the grid's free space (exploration.route_to), again
+        from where a blocked leg held it (the scans of the hold are in the grid), at most
+        MAX_ROUTES_BACK routes; with no route known, back along the points it visited."""
+        p = self.agent.p
+        for _ in range(MAX_ROUTES_BACK):
+            here = self.agent.position()
+            if math.dist(self.start[:2], here[:2]) <= p.position_tolerance:
+                return
+            legs = route_to(self.grid, here, self.start, p.explore_clearance, p.explore_pass_clearance,
+                            self.outline_room)
+            if legs is None:
+                break
+            try:
+                self._fly_back([(x, y, self.z) for x, y in legs])
+                return
+            except TaskError as e:
+                self.agent.backend.logwarn(f'[{self.task.name}] floor {self.floor}: back from exploring: {e}: '
+                                           'a new way back from here')
+                self.add_scan()
         here = self.agent.position()
         back = [(q[0], q[1], self.z) for q in reversed(self.visited)]
-        while back and math.dist(back[0][:2], here[:2]) <= self.agent.p.position_tolerance:
+        while back and math.dist(back[0][:2], here[:2]) <= p.position_tolerance:
             back.pop(0)
         try:
-            for q in back:
-                self.task.feedback('EXPLORING', f'floor {self.floor}: back to where the search started')
-                on_to = self.through(q)
-                self.task.call_task_or_raise('move', {'waypoint': (tuple(on_to), None)})
+            self._fly_back(back)
         except TaskError as e:    # the search's result stands; the caller's way out starts from here
             self.agent.backend.logwarn(f'[{self.task.name}] floor {self.floor}: back from exploring: {e}')
+
+    def _fly_back(self, points: list) -> None:
+        for q in points:
+            self.task.feedback('EXPLORING', f'floor {self.floor}: back to where the search started')
+            self.task.call_task_or_raise('move', {'waypoint': (tuple(self.through(q)), None)})
