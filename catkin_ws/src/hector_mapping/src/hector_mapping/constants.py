@@ -40,6 +40,10 @@ NODE_PARAM_DEFAULTS: dict[str, object] = {
     # by that yaw's change since the last scan. "" = off (the original's start: the last pose)
     "yaw_prior_frame": "",
     "pub_debug_output": False,
+    # not in the original (README, "beyond the original"): publish `map` (and answer dynamic_map) with the
+    # box of the cells scans have touched only, its origin moved to the box's corner. False = the original's
+    # whole map_size x map_size grid
+    "map_pub_known_area": False,
 }
 
 #: Log-odds values are clamped to +-this so that a cell can still change its mind after many scans and

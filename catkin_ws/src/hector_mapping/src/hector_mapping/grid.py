@@ -9,6 +9,8 @@ Conventions (the same for every level, so that all levels share one world frame)
 """
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from .constants import LOG_ODDS_LIMIT
@@ -48,6 +50,7 @@ class GridLevel:
         self.known = np.zeros((self.size, self.size), bool)
         # Scratch labels (0 untouched, 1 free, 2 endpoint) so that each cell changes once per scan.
         self._label = np.zeros(self.size * self.size, np.uint8)
+        self.bounds: Optional[tuple[int, int, int, int]] = None   # known_bounds()
 
     # ---- coordinates ---------------------------------------------------------------------------
     def world_to_map(self, xy: np.ndarray) -> np.ndarray:
@@ -63,6 +66,7 @@ class GridLevel:
         self.log_odds.fill(0.0)
         self.prob.fill(0.5)
         self.known.fill(False)
+        self.bounds = None
 
     # ---- update --------------------------------------------------------------------------------
     def ray_cells(self, origin_xy: np.ndarray, end_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -116,6 +120,7 @@ class GridLevel:
         free, occupied = self.ray_cells(origin_xy, end_xy)
         if free.size == 0 and occupied.size == 0:
             return 0
+        self._grow_bounds(free, occupied)
         label = self._label
         # Label 1 = passed through, 2 = endpoint (written last, so it wins); keep each cell once.
         label[free] = 1
@@ -130,6 +135,23 @@ class GridLevel:
         self.prob.reshape(-1)[idx] = 1.0 / (1.0 + np.exp(-new))
         self.known.reshape(-1)[idx] = True
         return int(occupied.size)
+
+    def _grow_bounds(self, free: np.ndarray, occupied: np.ndarray) -> None:
+        """Grow `bounds` by a scan's cells: every free cell lies on a beam from the origin (the first free
+        cell) to an endpoint inside the grid (ray_cells), so the box of the origin and the endpoints holds
+        them all."""
+        ends = occupied if free.size == 0 else np.append(occupied, free[:1])
+        rows, cols = np.divmod(ends, self.size)
+        box = (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max()))
+        if self.bounds is not None:
+            b = self.bounds
+            box = (min(b[0], box[0]), min(b[1], box[1]), max(b[2], box[2]), max(b[3], box[3]))
+        self.bounds = box
+
+    def known_bounds(self) -> Optional[tuple[int, int, int, int]]:
+        """(ix0, iy0, ix1, iy1), inclusive, of a box holding every cell a scan has touched (None: none).
+        Kept per update from the scans' end cells: no pass over the whole grid."""
+        return self.bounds
 
     # ---- access --------------------------------------------------------------------------------
     def interpolate(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -168,9 +190,13 @@ class GridLevel:
             dv = np.where(valid, dv, 0.0)
         return m, du * inv, dv * inv
 
-    def occupancy_grid_data(self) -> np.ndarray:
-        """The grid as nav_msgs/OccupancyGrid values (100 occupied, 0 free, -1 unknown), int8 (size, size)."""
-        out = np.full(self.log_odds.shape, -1, np.int8)
-        out[self.known & (self.log_odds > 0.0)] = 100
-        out[self.known & (self.log_odds <= 0.0)] = 0
+    def occupancy_grid_data(self, box: Optional[tuple[int, int, int, int]] = None) -> np.ndarray:
+        """The grid (or its cells in `box`, (ix0, iy0, ix1, iy1) inclusive) as nav_msgs/OccupancyGrid values
+        (100 occupied, 0 free, -1 unknown), int8 (rows, columns)."""
+        rows = slice(None) if box is None else slice(box[1], box[3] + 1)
+        cols = slice(None) if box is None else slice(box[0], box[2] + 1)
+        log_odds, known = self.log_odds[rows, cols], self.known[rows, cols]
+        out = np.full(log_odds.shape, -1, np.int8)
+        out[known & (log_odds > 0.0)] = 100
+        out[known & (log_odds <= 0.0)] = 0
         return out

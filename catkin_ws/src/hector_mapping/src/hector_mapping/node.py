@@ -293,15 +293,19 @@ class HectorMappingNode:
         """The finest level as an OccupancyGrid in the map frame (numpy-backed data)."""
         with self.lock:
             level = self.slam.levels[0]
-            data = level.occupancy_grid_data().reshape(-1).view(_Int8Data)
+            box = level.known_bounds() if self.p["map_pub_known_area"] else None
+            data = level.occupancy_grid_data(box).reshape(-1).view(_Int8Data)
         msg = numpy_msg(OccupancyGrid)()
         msg.header.stamp = rospy.Time.now()
         msg.header.frame_id = self.map_frame
         info = msg.info
         info.map_load_time = msg.header.stamp
         info.resolution = level.resolution
-        info.width = info.height = level.size
-        info.origin.position.x, info.origin.position.y = float(level.corner[0]), float(level.corner[1])
+        ix0, iy0 = (0, 0) if box is None else box[:2]
+        info.width = level.size if box is None else box[2] - box[0] + 1
+        info.height = level.size if box is None else box[3] - box[1] + 1
+        info.origin.position.x = float(level.corner[0]) + ix0 * level.resolution
+        info.origin.position.y = float(level.corner[1]) + iy0 * level.resolution
         info.origin.orientation.w = 1.0
         msg.data = data
         return msg

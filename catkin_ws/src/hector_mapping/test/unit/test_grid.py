@@ -119,3 +119,24 @@ def test_occupancy_grid_values():
     assert data[32, 42] == 100 and data[32, 35] == 0 and data[0, 0] == -1
     g.reset()
     assert (g.occupancy_grid_data() == -1).all() and (g.prob == 0.5).all()
+
+
+def test_the_known_box_holds_every_touched_cell_and_crops_the_grid_to_them():
+    """map_pub_known_area: the published grid is the box of the cells scans touched, found without a pass
+    over the whole grid; the cropped data is the whole grid's in that box and nothing known lies outside."""
+    g = make()
+    assert g.known_bounds() is None
+    rng = np.random.default_rng(3)
+    for origin in ((0.0, 0.0), (1.2, -0.7)):
+        angles = rng.uniform(-np.pi, np.pi, 40)
+        ranges = rng.uniform(0.3, 2.5, 40)
+        g.update(np.array(origin), np.c_[origin[0] + ranges * np.cos(angles), origin[1] + ranges * np.sin(angles)])
+    box = g.known_bounds()
+    rows, cols = np.nonzero(g.known)
+    assert box == (cols.min(), rows.min(), cols.max(), rows.max())
+    full = g.occupancy_grid_data()
+    crop = g.occupancy_grid_data(box)
+    assert crop.shape == (box[3] - box[1] + 1, box[2] - box[0] + 1)
+    assert (crop == full[box[1]:box[3] + 1, box[0]:box[2] + 1]).all()
+    g.reset()
+    assert g.known_bounds() is None
