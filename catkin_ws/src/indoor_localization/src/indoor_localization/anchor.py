@@ -22,6 +22,15 @@ pose at its next scan, exactly (0, 0, 0)); at that first pose the new map frame 
 dead reckoning says the robot is, counted from the last anchored pose before the jump (its drift: a few
 cm/s, over the second or two this takes), with the UAL's (compass) yaw. "none" lasts only until then; a
 jump that cannot be re-anchored within `relocalize_timeout` s stays "none" until the fix returns.
+
+One map per height band: outside, on GNSS, once the robot's reported height is more than `map_height_band`
+from the height its SLAM map was started at, a new map is asked for the same way (the anchor is fitted again
+on its pairs). Why (explore + GNSS-denied seed 109): a UAV's map held the scans of its whole trial, from the
+ground, its transit altitude and two floors; at floor 1's window its match was 0.16 rad off the compass, the
+anchor fit 0.19 m RMS, and the pose jumped as it entered: re-anchored on the UAL's dead reckoning, i.e. on the
+GNSS error (0.7 m). A 2D laser map of a building is a plan at one height: the extension, setbacks and the
+ground are elsewhere in another. A frame change on GNSS (a reset, a slide) drops the anchor until it is fitted
+again: a fix lost before then gives no pose rather than the old frame's anchor on the new map.
 """
 from __future__ import annotations
 
@@ -56,6 +65,9 @@ class Params:
     # after a jump indoors: a new SLAM map anchored on the UAL's dead reckoning from the last good pose
     relocalize: bool = True
     relocalize_timeout: float = 10.0          # s from the jump to the new map's first pose
+    # outside (on GNSS): a new SLAM map once the robot's height is this far from the one its map was started
+    # at (a 2D map holds one height band); <= 0: never
+    map_height_band: float = 2.0              # m
 
 
 @dataclass(frozen=True)
@@ -157,6 +169,7 @@ class IndoorPose:
         self.good: deque = deque()            # (t, pose x, y (corrected), reported x, y) while trusted indoors
         self.relocalizing: Optional[tuple] = None   # (jump t, good t, pose x, y, reported x, y) until re-anchored
         self.reset_requested = False          # the node should start the SLAM again (taken by take_reset_request)
+        self.map_z: Optional[float] = None    # the reported height the SLAM map was started at (on GNSS)
         self.events: list[str] = []           # what a node should log (taken by pop_events)
 
     # ---------------------------------------------------------------- inputs
@@ -203,11 +216,13 @@ class IndoorPose:
             self.frame_changes += 1
             if self.gnss_valid:
                 self.pairs.clear()            # its frame changed (a reset?): fit the anchor again
+                self.anchor = None
             else:
                 self._jumped(t)
         self.last_slam = (t, x, y, yaw)
         rep = self.reported.at(t, self.p.max_pair_gap)
         if self.gnss_valid and rep is not None:
+            self._keep_one_height_band(rep[2])
             self.pairs.append((t, x, y, yaw, rep[0], rep[1], rep[3]))
             while self.pairs and self.pairs[0][0] < t - self.p.anchor_window:
                 self.pairs.popleft()
@@ -230,6 +245,19 @@ class IndoorPose:
             z = last[3] if last is not None else float("nan")
         return Output(t, ax, ay, z, ayaw, self.source(t))
 
+    def _keep_one_height_band(self, z: float) -> None:
+        """On GNSS: ask for a new SLAM map when the height z is more than map_height_band from the map's."""
+        if self.map_z is None:
+            self.map_z = z
+            return
+        band = self.p.map_height_band
+        if band <= 0 or abs(z - self.map_z) <= band or self.reset_requested:
+            return
+        self.events.append(f"a new SLAM map: the height is {z:.1f} m, {z - self.map_z:+.1f} m from its map's "
+                           f"(one map per {band:.1f} m height band)")
+        self.reset_requested = True
+        self.map_z = z
+
     def take_reset_request(self) -> bool:
         """True once after a jump that asks for a new SLAM map (the node sends the reset)."""
         asked, self.reset_requested = self.reset_requested, False
@@ -247,6 +275,7 @@ class IndoorPose:
             return
         self.relocalizing = (t, *self.good[0])
         self.reset_requested = True
+        self.map_z = None                     # the new map's height: the next one on GNSS
         self.events.append(f"re-localizing: a new SLAM map is asked for, to be anchored on the UAL's dead "
                            f"reckoning from the pose at t={self.good[0][0]:.2f} s")
 

@@ -266,3 +266,42 @@ def test_seed_104_an_anchor_fitted_over_a_slam_slide_is_the_map_where_it_is_at_t
     for t, o, (x, y, _) in out:
         if 11.0 <= t < 20.0:
             assert o.source == SLAM and math.hypot(o.x - x, o.y - y) < 0.1, (t, o, x, y)
+
+
+def test_seed_109_outside_each_height_band_gets_a_new_map_and_a_fix_lost_before_its_anchor_gives_no_pose():
+    """Explore + GNSS-denied seed 109: a UAV's one SLAM map held its whole trial (the ground, its transit
+    altitude, two floors); entering floor 1 its match was 0.16 rad off the compass and the pose jumped. Outside,
+    a height more than map_height_band from the map's asks for a new map (a 2D plan holds one height); a
+    frame change on GNSS drops the anchor until it is fitted again, so a fix lost in between gives no pose
+    rather than the old anchor on the new map."""
+    core = IndoorPose()
+    band = Params().map_height_band
+    resets, origin = [], (0.0, 0.0, 0.0)        # the current map's origin (arena x, y, yaw)
+    for k in range(0, 30 * 20):
+        t = k / 30.0
+        z = 0.5 * t                              # climbing at 0.5 m/s for 20 s, to 10 m
+        x, y, yaw = 2.0 + 0.2 * t, 1.0, 0.3
+        core.on_reported(t, x, y, z, yaw)
+        if k % 2 == 0:
+            if core.take_reset_request():
+                resets.append(z)
+                origin = (x, y, yaw)
+            c, s = math.cos(origin[2]), math.sin(origin[2])
+            dx, dy = x - origin[0], y - origin[1]
+            o = core.on_slam(t, c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - origin[2]))
+            if o is not None:
+                assert math.hypot(o.x - x, o.y - y) < 0.05
+    assert len(resets) == 4 and all(b - a == pytest.approx(band, abs=0.2) for a, b in zip(resets, resets[1:])), resets
+    events = core.pop_events()
+    assert sum("a new SLAM map" in e for e in events) == 4, events
+    # a new map at 20 s; the fix lost 0.2 s later, before min_pairs pairs of it: no pose, not a wrong one
+    core.reset_requested = True
+    t = 20.0
+    core.take_reset_request()
+    core.on_reported(t, 6.0, 1.0, 12.0, 0.3)
+    core.on_slam(t, 0.0, 0.0, 0.0)               # the new map's origin: a jump of the old frame
+    core.on_reported(t + 0.1, 6.02, 1.0, 12.0, 0.3)
+    core.on_gnss(t + 0.2, False)
+    core.on_reported(t + 0.3, 6.06, 1.0, 12.0, 0.3)
+    assert core.on_slam(t + 0.3, 0.06, 0.0, 0.0) is None
+    assert core.source(t + 0.3) == NONE
