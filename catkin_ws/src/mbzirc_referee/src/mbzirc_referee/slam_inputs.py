@@ -6,8 +6,15 @@ Subscribed per robot: `localization/source` and `localization/pose` (indoor_loca
 reading /tf, which ual_sim fills at every tick); `/sim/robots` (truth, 2 Hz, in the order of `/sim/robot_ids`).
 The maps are not subscribed (a 2048 x 2048 grid of 4 MB that hector_mapping would then build and send every
 2 s per robot): each SLAM robot that has been indoors (or on `slam`) is asked for its map (`dynamic_map`,
-nav_msgs/GetMap) every `fetch_period` sim seconds and once more at the end of the trial; on an interrupted trial (Ctrl+C: the
+nav_msgs/GetMap) every `fetch_period` sim seconds, once as it leaves SLAM (its source turns from `slam` to
+another: out through the window) and once more at the end of the trial; on an interrupted trial (Ctrl+C: the
 services may be gone) the last map fetched is written.
+
+A map fetched while its robot is on SLAM, or as it leaves it, is that SLAM period's, kept with the robot's anchor
+at that time: each floor's file merges the newest map of every such period on it (the floor of the indoor flight
+the period belongs to). Why: indoor_pose starts a new SLAM map outside for every height band (its
+`~map_height_band`), so a robot's newest map at the end of the trial may be its transit altitude's; and two
+visits of one floor are two maps, in two frames.
 """
 from __future__ import annotations
 
@@ -31,6 +38,8 @@ from .slam_maps import Grid, GridError, grid_from_message, map_entry, place, wri
 
 THROTTLE_S = 10.0
 RECENT_SLAM_POSES = 20        # poses kept per robot and frame waiting for the other one of their stamp
+PERIOD_SLACK = 1.0            # s: a SLAM period starts at most this long before its indoor flight (the fix is
+                              # lost at the window, the truth is indoors a moment later)
 __all__ = ["SlamInputs"]
 
 
@@ -74,6 +83,7 @@ class SlamInputs:
         self.slam, self.lock, self.arena_frame = slam, lock, arena_frame
         self.on_truth = on_truth                           # (robot, t, x, y, z) of every true pose, lock held
         self.grids: dict[str, tuple] = {}                  # robot -> (Grid, frame)
+        self.period_grids: dict[tuple, tuple] = {}         # (robot, SLAM period's start) -> (Grid, frame, anchor)
         self.recent: dict[tuple, dict[float, tuple]] = {}  # (robot, "map" | "arena") -> {stamp: (x, y, yaw)}
         self.truth_ids: Optional[list] = None
         self.anchor_t: dict[str, float] = {}               # robot -> stamp of its newest anchor
@@ -91,7 +101,16 @@ class SlamInputs:
     # ---- inputs ----------------------------------------------------------------------------------
     def _on_source(self, msg: String, robot: str) -> None:
         with self.lock:
-            self.slam.set_source(robot, rospy.get_time(), msg.data)
+            period = self._slam_period(robot)
+            changed = self.slam.set_source(robot, rospy.get_time(), msg.data)
+        if changed and period is not None:        # leaving SLAM: the period's map, before any new one
+            threading.Thread(target=self.fetch_maps, args=([robot], period), daemon=True,
+                             name=f"recorder map of {robot}").start()
+
+    def _slam_period(self, robot: str) -> Optional[float]:
+        """The start of the robot's SLAM period when it is on SLAM now, else None. With the lock held."""
+        changes = self.slam.sources.get(robot)
+        return changes[-1][0] if changes and self.slam.on_slam(robot) else None
 
     def _on_slam_pose(self, msg: PoseStamped, robot: str) -> None:
         pose = _pose(msg)
@@ -146,11 +165,13 @@ class SlamInputs:
                         self.on_truth(rid, t, *xyz)
 
     # ---- maps ------------------------------------------------------------------------------------
-    def fetch_maps(self, _event: Any = None) -> None:
-        """Ask every SLAM robot that has been indoors (or on slam) for its map; a malformed one is refused (throttled)."""
+    def fetch_maps(self, robots: Any = None, period: Optional[float] = None) -> None:
+        """Ask every SLAM robot that has been indoors (or on slam), or those given, for its map; a malformed
+        one is refused (throttled). `period`: the SLAM period just left (see accept_map)."""
         with self.fetch_lock:
-            with self.lock:
-                robots = list(self.slam.been_inside)
+            if not isinstance(robots, list):      # (a timer's event)
+                with self.lock:
+                    robots = list(self.slam.been_inside)
             for robot in sorted(robots):
                 name = f"/{M.robot_ns(robot)}/dynamic_map"
                 try:
@@ -158,17 +179,23 @@ class SlamInputs:
                 except (rospy.ServiceException, rospy.ROSException) as e:
                     rospy.logwarn_throttle(THROTTLE_S, f"mission_recorder: no map from {name}: {e}")
                     continue
-                self.accept_map(robot, msg)
+                self.accept_map(robot, msg, period)
 
-    def accept_map(self, robot: str, msg: OccupancyGrid) -> bool:
-        """Keep a robot's map if it is well formed; else a throttled warning. True when kept."""
+    def accept_map(self, robot: str, msg: OccupancyGrid, period: Optional[float] = None) -> bool:
+        """Keep a robot's map if it is well formed; else a throttled warning. True when kept. A map of a robot on
+        SLAM now (or of `period`, the start of the SLAM period it has just left) is also kept as that period's,
+        with the robot's anchor now."""
         try:
             grid = grid_of(msg)
         except (GridError, ValueError, TypeError, AttributeError) as e:
             rospy.logwarn_throttle(THROTTLE_S, f"mission_recorder: malformed map of robot {robot} refused: {e}")
             return False
+        frame = msg.header.frame_id.strip("/")
         with self.lock:
-            self.grids[robot] = (grid, msg.header.frame_id.strip("/"))
+            self.grids[robot] = (grid, frame)
+            period = self._slam_period(robot) if period is None else period
+            if period is not None:
+                self.period_grids[(robot, period)] = (grid, frame, self.slam.anchors.get(robot))
         return True
 
     def fetch_maps_within(self, timeout: float) -> None:
@@ -184,11 +211,21 @@ class SlamInputs:
         """Write map_floor<N>.pgm/.yaml for every floor mapped; (summary entries, {floor: ArenaMap})."""
         with self.lock:
             floors = self.slam.map_floors(t_end, floor_of)
+            flights = self.slam.flights(t_end, floor_of)
             anchors = dict(self.slam.anchors)
             anchor_t = dict(self.anchor_t)
             grids = dict(self.grids)
+            period_grids = dict(self.period_grids)
         by_floor: dict[int, list] = {}
+        for (robot, start), (grid, frame, anchor) in sorted(period_grids.items()):
+            floor = next((f["floor"] for f in flights if f["robot"] == robot
+                          and f["t_start"] - PERIOD_SLACK <= start <= f["t_end"]), None)
+            anchor = (0.0, 0.0, 0.0) if frame == self.arena_frame else anchor
+            if floor is not None and anchor is not None:
+                by_floor.setdefault(floor, []).append((robot, grid, anchor))
         for robot, floor in sorted(floors.items()):
+            if any(r == robot for r, _ in period_grids):
+                continue                          # its SLAM periods' maps are placed above
             grid, frame = grids.get(robot, (None, ""))
             anchor = (0.0, 0.0, 0.0) if frame == self.arena_frame else anchors.get(robot)
             if grid is None or anchor is None:
@@ -204,7 +241,7 @@ class SlamInputs:
             stem = f"map_floor{floor}"
             write_map_server(m, out_dir, stem)
             maps[floor] = m
-            entry = map_entry(floor, [robot for robot, _, _ in items], stem, m)
+            entry = map_entry(floor, sorted({robot for robot, _, _ in items}), stem, m)
             entry["anchors"] = {robot: {"pose": [round(v, 3) for v in anchor], "t": anchor_t.get(robot)}
                                 for robot, _, anchor in items}      # where each grid was placed from
             entries.append(entry)

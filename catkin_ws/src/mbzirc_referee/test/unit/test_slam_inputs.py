@@ -28,6 +28,7 @@ def inputs(monkeypatch):
     si = S.SlamInputs.__new__(S.SlamInputs)                 # its callbacks without its ROS set-up
     si.slam, si.lock, si.arena_frame = SlamRecord(), threading.Lock(), "arena"
     si.grids, si.recent, si.truth_ids, si.anchor_t = {}, {}, None, {}
+    si.period_grids, si.fetch_lock = {}, threading.Lock()
     si.warnings = warnings
     return si
 
@@ -133,3 +134,30 @@ def test_report_draws_the_floor_maps(inputs, tmp_path):
     import matplotlib.image as mpimg
     assert mpimg.imread(str(tmp_path / "with_maps.png")).shape[0] > 1.5 * mpimg.imread(
         str(tmp_path / "without.png")).shape[0]                 # a row of floor panels below
+
+
+def test_a_floor_map_is_the_one_of_its_slam_period_not_the_newest_map_of_its_robot(inputs, tmp_path, monkeypatch):
+    """indoor_pose starts a new SLAM map outside for every height band: a UAV's newest map at the end of the
+    trial is its transit altitude's, in another frame. The map fetched as it leaves SLAM (its source turns
+    from slam to gnss) is its floor's, placed with the anchor of that moment."""
+    fetched = []
+
+    def fetch_maps(robots=None, period=None):        # the service's answer: the floor's grid
+        fetched.append((robots, period))
+        inputs.accept_map(robots[0], grid_msg(), period)
+    monkeypatch.setattr(inputs, "fetch_maps", fetch_maps)
+    started = []
+    monkeypatch.setattr(S.threading, "Thread", lambda target, args, **kw: SimpleNamespace(
+        start=lambda: started.append(target(*args))))
+    fly(inputs, "2", 1, (20.0, 10.0, math.pi / 2))
+    inputs._on_source(SimpleNamespace(data="gnss"), "2")            # out through the window
+    assert fetched == [(["2"], 10.0)] and ("2", 10.0) in inputs.period_grids
+    # outside, a new map in a new frame (its anchor moved), fetched on GNSS: not the floor's
+    inputs.slam.anchors["2"] = (-30.0, 40.0, 0.0)
+    inputs.accept_map("2", grid_msg(origin=(-8.0, -8.0)))
+    entries, _ = inputs.write_maps(str(tmp_path), 130.0, ARENA.floor_of)
+    assert [(e["floor"], e["robots"]) for e in entries] == [(1, ["2"])]
+    assert entries[0]["anchors"]["2"]["pose"] == pytest.approx([20.0, 10.0, math.pi / 2], abs=1e-3)
+    m1 = read_map_server(str(tmp_path / "map_floor1.yaml"))
+    col = int((18.95 - m1.origin[0]) / m1.resolution)           # the wall where the floor's anchor puts it
+    assert all(m1.codes[int((y - m1.origin[1]) / m1.resolution), col] == OCCUPIED for y in (8.2, 10.0, 11.8))
