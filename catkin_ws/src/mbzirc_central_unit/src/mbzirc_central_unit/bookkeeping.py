@@ -10,7 +10,8 @@ from typing import Any, Optional
 
 from . import constants as C
 from .command import Command, StrategyParams
-from .failure_rules import LEG_BLOCKED, NOT_SEEN_HOT, LegBackoff, UnconfirmedFires, failure_kind
+from .failure_rules import (LEG_BLOCKED, NOT_SEEN_HOT, UNSEEN_WINDOW_TRIES, WINDOW_UNSEEN, LegBackoff,
+                            UnconfirmedFires, failure_kind)
 from .world_model import AgentView, WorldView
 
 PENDING_TICKS = 10  # decision ticks an agent waits for the fires its search reported
@@ -27,6 +28,7 @@ class Bookkeeping:
         self.indoor_searches: Counter[tuple[int, Any]] = Counter()  # (floor, room index or "door")
         self.ground_searches = 0
         self.failures: Counter[tuple[str, str, Any]] = Counter()
+        self.window_unseen: Counter[tuple[str, str, Any]] = Counter()   # failure_rules rule 3
         self.in_flight: dict[str, Command] = {}
         self.last_done: dict[str, Command] = {}
         self.finished: set[str] = set()  # agents sent home for good
@@ -88,6 +90,13 @@ class Bookkeeping:
             self.notes.append(note)
             if gave_up:
                 self.failures[key] = max(self.failures[key], self.p.max_failures)
+        elif kind == WINDOW_UNSEEN:
+            self.window_unseen[key] += 1
+            if self.window_unseen[key] >= UNSEEN_WINDOW_TRIES:
+                self.failures[key] = max(self.failures[key], self.p.max_failures)
+                self.notes.append(f"agent {cmd.agent_id}: its laser saw no opening wide enough at the window of "
+                                  f"room {cmd.target} {self.window_unseen[key]} times: that window is given up "
+                                  "by it")
         elif kind == NOT_SEEN_HOT:
             note = self.unconfirmed.note(cmd.target, cmd.agent_id, facade=cmd.task == C.EXTINGUISH_FACADE_FIRE)
             if note:

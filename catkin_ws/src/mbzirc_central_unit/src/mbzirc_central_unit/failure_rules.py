@@ -32,6 +32,13 @@
    on a hole, and may miss (closed loop top-ups at 97 %: 6 of 12 short): the general limit stays.
    Other failures (fire not found, no water
    flows, time-outs) never count: a fire merely not found is not out.
+3. A window not sensed. enter_building fails with '<window|door> not found ahead by the laser in <s> s (no
+   window <w> m wide seen): holding' when the laser, from in front of it, sees no opening as wide as the
+   frame needs there: a fact of the window (an interior wall's end behind it, which an explored layout
+   does not know), not of the try; one more try covers a failure of the robot's own (its approach off, a
+   gust). Rule: after `UNSEEN_WINDOW_TRIES` such failures an agent gives that window up (as after
+   `max_failures` others; bookkeeping.window_ok then leaves one try to another agent). Explore + GNSS-denied
+   seeds 109 and 112: each UAV sent to facade B's split floor-1 window spent three tries of ~23 s on it.
 
 The action results have no structured field for either kind (mbzirc_comm_objs, pinned): the abort text
 is matched on the agents' fixed phrases below.
@@ -48,14 +55,21 @@ LEG_BLOCKED_TEXT = "blocks the leg"
 NOT_SEEN_HOT_TEXT = "not seen hot from the watering pose"
 NO_WATER_TEXT = "no water spent"   # tasks/indoor.py: an abort before any water
 
+WINDOW_UNSEEN_TEXT = ("not found ahead by the laser", "wide seen)")   # tasks/passage.py, both in the text
+
 LEG_BLOCKED = "leg blocked"
 NOT_SEEN_HOT = "not seen hot"
+WINDOW_UNSEEN = "window not sensed"
+UNSEEN_WINDOW_TRIES = 2      # tries of an agent at a window its laser saw no opening in (rule 3)
 
 
 def failure_kind(task: str, message: str) -> Optional[str]:
-    """LEG_BLOCKED, NOT_SEEN_HOT (only from the extinguish tasks) or None for any other failure."""
+    """LEG_BLOCKED, NOT_SEEN_HOT (only from the extinguish tasks), WINDOW_UNSEEN (only from enter_building)
+    or None for any other failure."""
     if LEG_BLOCKED_TEXT in message:
         return LEG_BLOCKED
+    if task == C.ENTER_BUILDING and all(text in message for text in WINDOW_UNSEEN_TEXT):
+        return WINDOW_UNSEEN
     if task in (C.EXTINGUISH_FACADE_FIRE, C.EXTINGUISH_INDOOR_FIRE) and NOT_SEEN_HOT_TEXT in message \
             and NO_WATER_TEXT not in message:
         return NOT_SEEN_HOT
