@@ -466,7 +466,7 @@ class ExtinguishIndoorFire(AgentTask):
     def _look_around(self, yaw: float) -> Optional[float]:
         """The fire not in sight from the watering pose (heading yaw): look for it in the raw thermal image
         (thermal_contrast.warm_spot) straight ahead, then LOOK_TURN rad to either side and (UAV) LOOK_CLIMB m
-        above and below, each on a frame taken after the robot got there. A look where the fire detector
+        above and below (and, none showing, twice that), each on a frame taken after the robot got there. A look where the fire detector
         reports a fire ends the search there; else, once every look was made, the warmest area seen is
         taken; turn (and climb) onto its centre and return that heading. None, back at yaw and the height it
         came at, when none shows. Why (realistic seed 103): the watering pose faces the fire's track from
@@ -486,6 +486,13 @@ class ExtinguishIndoorFire(AgentTask):
         if a.ROBOT_TYPE == 'uav':
             looks += [(0.0, LOOK_CLIMB), (0.0, -LOOK_CLIMB)]
         best = self._looks(yaw, z0, looks, 'fire not in sight', warm_too=True)
+        if best is None and a.ROBOT_TYPE == 'uav':
+            # farther up and down: the track's height is the GNSS height of the robot that saw the fire, the
+            # watering height this one's; their vertical errors differ by up to a metre (explore + GNSS-denied
+            # seed 109 on 61430b6: in1_w's track 0.78 m above the fire, a top-up's five looks found nothing
+            # and its 1.34 L went onto the wall, the fire left at 93 %)
+            best = self._looks(yaw, z0, [(0.0, 2 * LOOK_CLIMB), (0.0, -2 * LOOK_CLIMB)], 'fire not in sight',
+                               warm_too=True)
         if best is None:
             a.backend.loginfo(f'[{self.name}] fire not in sight from the watering pose nor beside, above or '
                               'below it')
