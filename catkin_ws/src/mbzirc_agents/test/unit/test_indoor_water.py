@@ -223,7 +223,8 @@ def test_cold_without_water_flowing_is_not_out(scenes):
 
 def test_hot_before_turning_to_the_hot_spot_but_not_after_is_not_out(scenes):
     """The check saw the fire hot, the camera's detection was 0.3 rad aside, the robot turned there and then
-    reads cold: it never saw the fire hot from the pose it waters from."""
+    reads cold, detector and raw image (seed 109's rule: a raw image showing it hot there would do): it never
+    saw the fire hot from the pose it waters from."""
     from mbzirc_comm_objs.msg import ObjectDetection, ObjectDetectionList
     sc = scenes(hot_until=10.0)
     yaw0 = []
@@ -236,8 +237,10 @@ def test_hot_before_turning_to_the_hot_spot_but_not_after_is_not_out(scenes):
         sc.be.subs['sensed_objects'](ObjectDetectionList(objects=[det]))
         return CheckFireResponse(fire_detected=abs(sc.ual.yaw - yaw0[0]) < 0.05)
     sc.be.handlers['thermal_detection/fire_detected'] = answer
-    rng = np.random.default_rng(2)           # the raw image shows the fire where the detection says
-    sc.ual.thermal = lambda: frame_at(60.0, 0.3 - (sc.ual.yaw - yaw0[0] if yaw0 else 0.0), 0.0, rng)
+    rng = np.random.default_rng(2)           # the raw image: the fire where the detection says, until the turn
+    turned = lambda: bool(yaw0) and abs(sc.ual.yaw - yaw0[0]) >= 0.05
+    sc.ual.thermal = lambda: frame_at(0.0 if turned() else 60.0, 0.3 - (sc.ual.yaw - yaw0[0] if yaw0 else 0.0),
+                                      0.0, rng)
     s = sc.extinguish()
     assert s.status == 'aborted' and 'not seen hot from the watering pose' in s.result.message, s.result.message
     assert sc.statuses == []
@@ -1117,4 +1120,36 @@ def test_a_fire_put_out_in_view_is_still_judged_out_after_the_look_beside_it(sce
     fire = FireModel(sc, need=1.0)
     sc.threads = (fire,)
     s = sc.extinguish(timeout=60)
+    assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+
+
+class RingFillsTheView(LevelCamera):
+    """The detector's contrast test against the frame's median: from the watering distance a fire straight
+    ahead fills the view with its ring of flames and the detector no longer reports it; off the optical axis
+    (more than 0.1 rad) it does. The raw image shows it wherever it is in the view."""
+
+    def hot(self):
+        return super().hot() and abs(self.view()[1]) > 0.1
+
+    def frame(self, rng):
+        d, bearing, rise = self.view()
+        return frame_at(60.0 if self.in_image() and self.received < self.need else 0.0, bearing,
+                        math.atan2(rise, d), rng)
+
+
+def test_seed_109_a_fire_the_detector_loses_once_aimed_at_is_watered_on_the_raw_image(scenes):
+    """Explore + GNSS-denied seed 109 on e45b72d: a top-up robot saw in1_w (69 % out) with the detector in a
+    look 29 deg aside, turned onto it, and there the ring of flames filled its view: the detector's test
+    against the frame's median failed and the goal aborted 'hot before aiming at its hot spot, cold after; no
+    water spent', three times; the fire was doubted and left burning. Just aimed at a fire the detector
+    reported, the raw image's steady warm area says hot: watered until out. Here the watering pose faces
+    0.15 rad beside the fire (the track off): reported at once, aimed at, then silent."""
+    sc = scenes()
+    cam = RingFillsTheView(sc)
+    sc.threads = (cam,)
+    track = sc.agent.fire(7).pose.pose.position
+    track.y = FIRE[1] + 1.5 * math.tan(0.15)                   # the watering pose faces 0.15 rad beside it
+    s = sc.extinguish(timeout=60)
+    assert 'hot before aiming' not in s.result.message, s.result.message
+    assert cam.received >= cam.need, f'{cam.received:.2f} s of water in of {cam.need:.2f}: {s.result.message}'
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message

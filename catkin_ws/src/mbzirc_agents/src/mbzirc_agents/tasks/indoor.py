@@ -645,7 +645,7 @@ class ExtinguishIndoorFire(AgentTask):
             if turned is not None:                      # a new heading: seen hot from there, or no water
                 yaw = turned
                 cold = ColdConfirmation()
-                if not self._seen_hot(cold, a.p.check_fire_time):
+                if not self._seen_hot(cold, a.p.check_fire_time, raw_too=True):
                     raise TaskError(f'fire {ud.fire_id} {NOT_SEEN_HOT}: hot before aiming at its hot spot, '
                                     'cold after; no water spent')
         elif not self._well_localised(ud.fire_id):
@@ -1011,13 +1011,25 @@ class ExtinguishIndoorFire(AgentTask):
             return False
         return self._heading_at(pose, here)
 
-    def _seen_hot(self, cold: ColdConfirmation, seconds: float) -> bool:
-        """Poll CheckFire for up to seconds (its frame filter needs > 1 s of hot frames) until hot."""
+    def _seen_hot(self, cold: ColdConfirmation, seconds: float, raw_too: bool = False) -> bool:
+        """Poll CheckFire for up to seconds (its frame filter needs > 1 s of hot frames) until hot. raw_too
+        (just turned onto a fire the detector reported): hot also when, the detector silent, the raw thermal
+        image shows a steady warm area thermal_contrast.LOCK_MIN_RISE x ~out_contrast over its wall (locked).
+        Why (explore + GNSS-denied seed 109 on e45b72d): a top-up robot saw in1_w (69 % out) with the detector
+        29 deg aside, turned onto it, and from 1.5 m its ring of flames filled the view: the frame's median rose
+        with it, the detector's contrast test (30 degC over the median) failed, and the goal aborted 'hot before
+        aiming, cold after' three times without water; the fire was doubted and left burning."""
         end = self.agent.backend.now() + seconds
         while True:
             cold.update(self.agent.fire_detected())
             if cold.seen_hot:
                 self.contrast.lock_on_latest()           # the fire as seen hot, for the raw cold check
+                return True
+            if raw_too and self.contrast.lock_on_latest(steady=True):
+                self.agent.backend.loginfo(f'[{self.name}] aimed at the fire: the detector no longer reports it, '
+                                           f'the raw thermal image shows it {self.contrast.locked_contrast:.1f} '
+                                           'degC over its wall: seen hot')
+                cold.update(True)
                 return True
             if self.agent.backend.now() >= end:
                 return False
