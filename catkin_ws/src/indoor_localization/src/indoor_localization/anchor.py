@@ -170,6 +170,7 @@ class IndoorPose:
         self.relocalizing: Optional[tuple] = None   # (jump t, good t, pose x, y, reported x, y) until re-anchored
         self.reset_requested = False          # the node should start the SLAM again (taken by take_reset_request)
         self.map_z: Optional[float] = None    # the reported height the SLAM map was started at (on GNSS)
+        self.map_asked = False                # a new map was asked for on GNSS: its first pose is no surprise
         self.events: list[str] = []           # what a node should log (taken by pop_events)
 
     # ---------------------------------------------------------------- inputs
@@ -212,7 +213,9 @@ class IndoorPose:
         if self.relocalizing is not None:
             return self._relocalize(t, x, y, yaw)
         if self._is_jump(t, x, y, yaw):
-            self.events.append(f"SLAM pose jumped at t={t:.2f} s")
+            self.events.append(f"the new SLAM map started at t={t:.2f} s: the anchor is fitted again"
+                               if self.gnss_valid and self.map_asked else f"SLAM pose jumped at t={t:.2f} s")
+            self.map_asked = False
             self.frame_changes += 1
             if self.gnss_valid:
                 self.pairs.clear()            # its frame changed (a reset?): fit the anchor again
@@ -256,6 +259,7 @@ class IndoorPose:
         self.events.append(f"a new SLAM map: the height is {z:.1f} m, {z - self.map_z:+.1f} m from its map's "
                            f"(one map per {band:.1f} m height band)")
         self.reset_requested = True
+        self.map_asked = True
         self.map_z = z
 
     def take_reset_request(self) -> bool:
