@@ -29,7 +29,10 @@ on its pairs). Why (explore + GNSS-denied seed 109): a UAV's map held the scans 
 ground, its transit altitude and two floors; at floor 1's window its match was 0.16 rad off the compass, the
 anchor fit 0.19 m RMS, and the pose jumped as it entered: re-anchored on the UAL's dead reckoning, i.e. on the
 GNSS error (0.7 m). A 2D laser map of a building is a plan at one height: the extension, setbacks and the
-ground are elsewhere in another. A frame change on GNSS (a reset, a slide) drops the anchor until it is fitted
+ground are elsewhere in another. Not within `map_keep_near` of a building's footprint: there the robot is
+about to go in (explore + GNSS-denied seed 115 on e45b72d: a UAV's height set to its window's middle by the
+altimeter crossed the band in the window's wall, the fix was lost 0.1 s after the reset, and it had no pose
+for the rest of the trial); the height bands are crossed away from the building (take-off, the elevators). A frame change on GNSS (a reset, a slide) drops the anchor until it is fitted
 again: a fix lost before then gives no pose rather than the old frame's anchor on the new map.
 """
 from __future__ import annotations
@@ -68,6 +71,9 @@ class Params:
     # outside (on GNSS): a new SLAM map once the robot's height is this far from the one its map was started
     # at (a 2D map holds one height band); <= 0: never
     map_height_band: float = 2.0              # m
+    # ... but not nearer than this to a building's footprint (horizontally): there the robot is about to go in
+    # (a window's approach, its height set by the altimeter), and a map asked for then has no anchor yet
+    map_keep_near: float = 5.0                # m
 
 
 @dataclass(frozen=True)
@@ -152,8 +158,9 @@ class IndoorPose:
     """Feed it the UAL's reported poses, its GNSS status and the SLAM poses (any order, stamps in seconds);
     it keeps the anchor and says which source is valid."""
 
-    def __init__(self, params: Params = Params()):
+    def __init__(self, params: Params = Params(), footprints: tuple = ()):
         self.p = params
+        self.footprints = tuple(footprints)   # (x_min, y_min, x_max, y_max, top) of the buildings (public)
         self.reported = ReportedPoses()
         self.pairs: deque = deque()           # (t, slam x, y, yaw, arena x, y, yaw)
         self.anchor: Optional[Anchor] = None
@@ -225,7 +232,7 @@ class IndoorPose:
         self.last_slam = (t, x, y, yaw)
         rep = self.reported.at(t, self.p.max_pair_gap)
         if self.gnss_valid and rep is not None:
-            self._keep_one_height_band(rep[2])
+            self._keep_one_height_band(rep[0], rep[1], rep[2])
             self.pairs.append((t, x, y, yaw, rep[0], rep[1], rep[3]))
             while self.pairs and self.pairs[0][0] < t - self.p.anchor_window:
                 self.pairs.popleft()
@@ -248,19 +255,24 @@ class IndoorPose:
             z = last[3] if last is not None else float("nan")
         return Output(t, ax, ay, z, ayaw, self.source(t))
 
-    def _keep_one_height_band(self, z: float) -> None:
-        """On GNSS: ask for a new SLAM map when the height z is more than map_height_band from the map's."""
+    def _keep_one_height_band(self, x: float, y: float, z: float) -> None:
+        """On GNSS: ask for a new SLAM map when the height z is more than map_height_band from the map's, unless
+        (x, y) is within map_keep_near of a building's footprint."""
         if self.map_z is None:
             self.map_z = z
             return
         band = self.p.map_height_band
-        if band <= 0 or abs(z - self.map_z) <= band or self.reset_requested:
+        if band <= 0 or abs(z - self.map_z) <= band or self.reset_requested or self._near_a_building(x, y):
             return
         self.events.append(f"a new SLAM map: the height is {z:.1f} m, {z - self.map_z:+.1f} m from its map's "
                            f"(one map per {band:.1f} m height band)")
         self.reset_requested = True
         self.map_asked = True
         self.map_z = z
+
+    def _near_a_building(self, x: float, y: float) -> bool:
+        return any(math.hypot(max(f[0] - x, 0.0, x - f[2]), max(f[1] - y, 0.0, y - f[3])) < self.p.map_keep_near
+                   for f in self.footprints)
 
     def take_reset_request(self) -> bool:
         """True once after a jump that asks for a new SLAM map (the node sends the reset)."""

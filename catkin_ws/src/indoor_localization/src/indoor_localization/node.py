@@ -112,7 +112,8 @@ class OutlineRefinement:
 class IndoorPoseNode:
     def __init__(self) -> None:
         g = rospy.get_param
-        self.core = IndoorPose(params_from_ros(Params, ""))
+        world = str(g("~world_file", ""))
+        self.core = IndoorPose(params_from_ros(Params, ""), (load_arena(world) if world else ARENA).footprints)
         self.outline = OutlineRefinement() if bool(g("~outline_refinement", True)) else None
         ns = rospy.get_namespace().strip("/")
         self.map_frame = str(g("~map_frame", f"{ns}/map" if ns else "map"))

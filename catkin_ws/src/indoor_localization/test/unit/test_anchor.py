@@ -307,3 +307,20 @@ def test_seed_109_outside_each_height_band_gets_a_new_map_and_a_fix_lost_before_
     core.on_reported(t + 0.3, 6.06, 1.0, 12.0, 0.3)
     assert core.on_slam(t + 0.3, 0.06, 0.0, 0.0) is None
     assert core.source(t + 0.3) == NONE
+
+
+def test_seed_115_no_new_map_is_asked_for_near_a_building_where_the_robot_is_about_to_go_in():
+    """Explore + GNSS-denied seed 115 on e45b72d: at facade C's floor-1 window the altimeter set a UAV's height
+    to the window's middle, 2.0 m from the height its map was started at on the way there; the new map was
+    asked for in the window's wall, the fix was lost 0.1 s later with no anchor yet, and the UAV had no pose
+    for the rest of the trial. Within map_keep_near of a footprint no new map is asked for; farther out it is."""
+    tower = (11.4, 6.7, 24.2, 19.5, 15.0)
+    for x, asked in ((9.0, False), (3.0, True)):      # 2.4 m from facade C, 8.4 m from it
+        core = IndoorPose(Params(), (tower,))
+        for k in range(60):
+            t = k / 30.0
+            z = 8.9 if k < 30 else 6.7                # down 2.2 m after a second
+            core.on_reported(t, x, 12.5, z, 0.0)
+            if k % 2 == 0:
+                core.on_slam(t, x - 2.0, 0.5, 0.0)
+        assert core.take_reset_request() is asked, (x, core.pop_events())
