@@ -50,7 +50,7 @@ class GridLevel:
         self.known = np.zeros((self.size, self.size), bool)
         # Scratch labels (0 untouched, 1 free, 2 endpoint) so that each cell changes once per scan.
         self._label = np.zeros(self.size * self.size, np.uint8)
-        self.bounds: Optional[tuple[int, int, int, int]] = None   # known_bounds()
+        self._bounds: Optional[tuple[int, int, int, int]] = None   # known_bounds()
 
     # ---- coordinates ---------------------------------------------------------------------------
     def world_to_map(self, xy: np.ndarray) -> np.ndarray:
@@ -66,7 +66,7 @@ class GridLevel:
         self.log_odds.fill(0.0)
         self.prob.fill(0.5)
         self.known.fill(False)
-        self.bounds = None
+        self._bounds = None
 
     # ---- update --------------------------------------------------------------------------------
     def ray_cells(self, origin_xy: np.ndarray, end_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -137,21 +137,21 @@ class GridLevel:
         return int(occupied.size)
 
     def _grow_bounds(self, free: np.ndarray, occupied: np.ndarray) -> None:
-        """Grow `bounds` by a scan's cells: every free cell lies on a beam from the origin (the first free
+        """Grow the known box by a scan's cells: every free cell lies on a beam from the origin (the first free
         cell) to an endpoint inside the grid (ray_cells), so the box of the origin and the endpoints holds
         them all."""
         ends = occupied if free.size == 0 else np.append(occupied, free[:1])
         rows, cols = np.divmod(ends, self.size)
         box = (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max()))
-        if self.bounds is not None:
-            b = self.bounds
+        if self._bounds is not None:
+            b = self._bounds
             box = (min(b[0], box[0]), min(b[1], box[1]), max(b[2], box[2]), max(b[3], box[3]))
-        self.bounds = box
+        self._bounds = box
 
     def known_bounds(self) -> Optional[tuple[int, int, int, int]]:
         """(ix0, iy0, ix1, iy1), inclusive, of a box holding every cell a scan has touched (None: none).
         Kept per update from the scans' end cells: no pass over the whole grid."""
-        return self.bounds
+        return self._bounds
 
     # ---- access --------------------------------------------------------------------------------
     def interpolate(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -294,6 +294,8 @@ class HectorMappingNode:
         with self.lock:
             level = self.slam.levels[0]
             box = level.known_bounds() if self.p["map_pub_known_area"] else None
+            if box is None:                      # the original's whole grid
+                box = (0, 0, level.size - 1, level.size - 1)
             data = level.occupancy_grid_data(box).reshape(-1).view(_Int8Data)
         msg = numpy_msg(OccupancyGrid)()
         msg.header.stamp = rospy.Time.now()
@@ -301,11 +303,9 @@ class HectorMappingNode:
         info = msg.info
         info.map_load_time = msg.header.stamp
         info.resolution = level.resolution
-        ix0, iy0 = (0, 0) if box is None else box[:2]
-        info.width = level.size if box is None else box[2] - box[0] + 1
-        info.height = level.size if box is None else box[3] - box[1] + 1
-        info.origin.position.x = float(level.corner[0]) + ix0 * level.resolution
-        info.origin.position.y = float(level.corner[1]) + iy0 * level.resolution
+        info.width, info.height = box[2] - box[0] + 1, box[3] - box[1] + 1
+        info.origin.position.x = float(level.corner[0]) + box[0] * level.resolution
+        info.origin.position.y = float(level.corner[1]) + box[1] * level.resolution
         info.origin.orientation.w = 1.0
         msg.data = data
         return msg

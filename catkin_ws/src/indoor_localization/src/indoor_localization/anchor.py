@@ -32,8 +32,9 @@ GNSS error (0.7 m). A 2D laser map of a building is a plan at one height: the ex
 ground are elsewhere in another. Not within `map_keep_near` of a building's footprint: there the robot is
 about to go in (explore + GNSS-denied seed 115 on e45b72d: a UAV's height set to its window's middle by the
 altimeter crossed the band in the window's wall, the fix was lost 0.1 s after the reset, and it had no pose
-for the rest of the trial); the height bands are crossed away from the building (take-off, the elevators). A frame change on GNSS (a reset, a slide) drops the anchor until it is fitted
-again: a fix lost before then gives no pose rather than the old frame's anchor on the new map.
+for the rest of the trial); the height bands are crossed away from the building (take-off, the elevators).
+A frame change on GNSS (a reset, a slide) drops the anchor until it is fitted again: a fix lost before then
+gives no pose rather than the old frame's anchor on the new map.
 """
 from __future__ import annotations
 
@@ -43,6 +44,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
+from mbzirc_arena.buildings import in_footprint, nearest_face
 from mbzirc_arena.yaw import wrap_angle
 
 GNSS, SLAM, NONE = "gnss", "slam", "none"
@@ -271,8 +273,7 @@ class IndoorPose:
         self.map_z = z
 
     def _near_a_building(self, x: float, y: float) -> bool:
-        return any(math.hypot(max(f[0] - x, 0.0, x - f[2]), max(f[1] - y, 0.0, y - f[3])) < self.p.map_keep_near
-                   for f in self.footprints)
+        return in_footprint((x, y), self.footprints) or nearest_face((x, y), self.footprints)[1] < self.p.map_keep_near
 
     def take_reset_request(self) -> bool:
         """True once after a jump that asks for a new SLAM map (the node sends the reset)."""

@@ -52,10 +52,8 @@ class OutlineRefinement:
     each scan with the SLAM pose of the same stamp, at most every `~scan_period` s, and smooths the
     correction it applies. Called from the SLAM pose callback only."""
 
-    def __init__(self) -> None:
+    def __init__(self, arena) -> None:
         g = rospy.get_param
-        world = str(g("~world_file", ""))
-        arena = load_arena(world) if world else ARENA
         self.refiner = OutlineRefiner(outline_faces(arena.footprints), params_from_ros(RefineParams, "outline/"))
         self.smoother = CorrectionSmoother(float(g("~correction_rate", 1.0)), float(g("~yaw_correction_rate", 0.1)))
         self.scan_period = float(g("~scan_period", 0.2))
@@ -113,8 +111,9 @@ class IndoorPoseNode:
     def __init__(self) -> None:
         g = rospy.get_param
         world = str(g("~world_file", ""))
-        self.core = IndoorPose(params_from_ros(Params, ""), (load_arena(world) if world else ARENA).footprints)
-        self.outline = OutlineRefinement() if bool(g("~outline_refinement", True)) else None
+        arena = load_arena(world) if world else ARENA      # its public outline only
+        self.core = IndoorPose(params_from_ros(Params, ""), arena.footprints)
+        self.outline = OutlineRefinement(arena) if bool(g("~outline_refinement", True)) else None
         ns = rospy.get_namespace().strip("/")
         self.map_frame = str(g("~map_frame", f"{ns}/map" if ns else "map"))
         self.arena_frame = str(g("~arena_frame", GLOBAL_FRAME))

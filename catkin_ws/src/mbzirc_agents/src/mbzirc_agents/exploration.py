@@ -295,8 +295,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
 
 
 def route_to(grid: FloorGrid, here: Sequence[float], goal: Sequence[float], clearance: float,
-             pass_clearance: Optional[float] = None, outline_clearance: float = 0.0,
-             skip: Iterable = ()) -> Optional[list]:
+             pass_clearance: Optional[float] = None, outline_clearance: float = 0.0) -> Optional[list]:
     """The legs [(x, y), ...] from here to goal over the sensed free space, kept and costed as next_viewpoint's
     (the goal's own cell counts as standable: the robot stood there), or None when no way is known. Why
     (realistic seed 112 with exploration, GNSS denied): going back to where the search started along the
@@ -307,7 +306,7 @@ def route_to(grid: FloorGrid, here: Sequence[float], goal: Sequence[float], clea
         return None
     if start == end:
         return []
-    space = _Walkable(grid, start, clearance, pass_clearance, outline_clearance, skip)
+    space = _Walkable(grid, start, clearance, pass_clearance, outline_clearance, ())
     space.ok[end] = space.passable[end] = True
     parent, _ = paths_from(space.passable, start, space.cost)
     if end not in parent:

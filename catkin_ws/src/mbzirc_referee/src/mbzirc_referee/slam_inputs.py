@@ -104,7 +104,7 @@ class SlamInputs:
             period = self._slam_period(robot)
             changed = self.slam.set_source(robot, rospy.get_time(), msg.data)
         if changed and period is not None:        # leaving SLAM: the period's map, before any new one
-            threading.Thread(target=self.fetch_maps, args=([robot], period), daemon=True,
+            threading.Thread(target=self.fetch_left_map, args=(robot, period), daemon=True,
                              name=f"recorder map of {robot}").start()
 
     def _slam_period(self, robot: str) -> Optional[float]:
@@ -165,21 +165,27 @@ class SlamInputs:
                         self.on_truth(rid, t, *xyz)
 
     # ---- maps ------------------------------------------------------------------------------------
-    def fetch_maps(self, robots: Any = None, period: Optional[float] = None) -> None:
-        """Ask every SLAM robot that has been indoors (or on slam), or those given, for its map; a malformed
-        one is refused (throttled). `period`: the SLAM period just left (see accept_map)."""
+    def fetch_maps(self, _event: Any = None) -> None:
+        """Ask every SLAM robot that has been indoors (or on slam) for its map; a malformed one is refused (throttled)."""
         with self.fetch_lock:
-            if not isinstance(robots, list):      # (a timer's event)
-                with self.lock:
-                    robots = list(self.slam.been_inside)
+            with self.lock:
+                robots = list(self.slam.been_inside)
             for robot in sorted(robots):
-                name = f"/{M.robot_ns(robot)}/dynamic_map"
-                try:
-                    msg = rospy.ServiceProxy(name, _NumpyGetMap)().map
-                except (rospy.ServiceException, rospy.ROSException) as e:
-                    rospy.logwarn_throttle(THROTTLE_S, f"mission_recorder: no map from {name}: {e}")
-                    continue
-                self.accept_map(robot, msg, period)
+                self._fetch(robot)
+
+    def fetch_left_map(self, robot: str, period: float) -> None:
+        """fetch_maps for one robot that has just left the SLAM period started at `period` (see accept_map)."""
+        with self.fetch_lock:
+            self._fetch(robot, period)
+
+    def _fetch(self, robot: str, period: Optional[float] = None) -> None:
+        name = f"/{M.robot_ns(robot)}/dynamic_map"
+        try:
+            msg = rospy.ServiceProxy(name, _NumpyGetMap)().map
+        except (rospy.ServiceException, rospy.ROSException) as e:
+            rospy.logwarn_throttle(THROTTLE_S, f"mission_recorder: no map from {name}: {e}")
+            return
+        self.accept_map(robot, msg, period)
 
     def accept_map(self, robot: str, msg: OccupancyGrid, period: Optional[float] = None) -> bool:
         """Keep a robot's map if it is well formed; else a throttled warning. True when kept. A map of a robot on

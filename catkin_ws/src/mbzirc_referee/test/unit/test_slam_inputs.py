@@ -142,16 +142,16 @@ def test_a_floor_map_is_the_one_of_its_slam_period_not_the_newest_map_of_its_rob
     from slam to gnss) is its floor's, placed with the anchor of that moment."""
     fetched = []
 
-    def fetch_maps(robots=None, period=None):        # the service's answer: the floor's grid
-        fetched.append((robots, period))
-        inputs.accept_map(robots[0], grid_msg(), period)
-    monkeypatch.setattr(inputs, "fetch_maps", fetch_maps)
+    def fetch(robot, period=None):                   # the service's answer: the floor's grid
+        fetched.append((robot, period))
+        inputs.accept_map(robot, grid_msg(), period)
+    monkeypatch.setattr(inputs, "_fetch", fetch)
     started = []
     monkeypatch.setattr(S.threading, "Thread", lambda target, args, **kw: SimpleNamespace(
         start=lambda: started.append(target(*args))))
     fly(inputs, "2", 1, (20.0, 10.0, math.pi / 2))
     inputs._on_source(SimpleNamespace(data="gnss"), "2")            # out through the window
-    assert fetched == [(["2"], 10.0)] and ("2", 10.0) in inputs.period_grids
+    assert fetched == [("2", 10.0)] and ("2", 10.0) in inputs.period_grids
     # outside, a new map in a new frame (its anchor moved), fetched on GNSS: not the floor's
     inputs.slam.anchors["2"] = (-30.0, 40.0, 0.0)
     inputs.accept_map("2", grid_msg(origin=(-8.0, -8.0)))

@@ -466,8 +466,8 @@ class ExtinguishIndoorFire(AgentTask):
     def _look_around(self, yaw: float) -> Optional[float]:
         """The fire not in sight from the watering pose (heading yaw): look for it in the raw thermal image
         (thermal_contrast.warm_spot) straight ahead, then LOOK_TURN rad to either side and (UAV) LOOK_CLIMB m
-        above and below (and, none showing, twice that), each on a frame taken after the robot got there. A look where the fire detector
-        reports a fire ends the search there; else, once every look was made, the warmest area seen is
+        above and below (and, none showing, twice that), each on a frame taken after the robot got there. A
+        look where the fire detector reports a fire ends the search there; else, once every look was made, the warmest area seen is
         taken; turn (and climb) onto its centre and return that heading. None, back at yaw and the height it
         came at, when none shows. Why (realistic seed 103): the watering pose faces the fire's track from
         where the robot's GNSS fix says it is, and the two GNSS errors (0.5 m per axis, 0.4 m in height,
@@ -556,8 +556,8 @@ class ExtinguishIndoorFire(AgentTask):
     def _off_the_fire(self, spot, then) -> Optional[str]:
         """Why the laser places a thermal spot (seen from pose `then`) where the fire cannot be, or None: the
         wall along its bearing (wall_clearance.wall_ahead, in a corridor LOOK_RAY_HALF_WIDTH either side)
-        lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none (an opening). Unchecked (None) without a fresh scan or an estimate. Why (explore + GNSS-denied seed
-        106): in1_w, 98 % out and too faint to see, stands beside a window; four top-ups each took the
+        lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none (an opening). Unchecked (None)
+        without a fresh scan or an estimate. Why (explore + GNSS-denied seed 106): in1_w, 98 % out and too faint to see, stands beside a window; four top-ups each took the
         warmest area in their looks, 33 deg off, the sun-heated outside seen through the window, and poured
         their whole tank there."""
         points = self.walls.points()
