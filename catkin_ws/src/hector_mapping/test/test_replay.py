@@ -13,6 +13,7 @@ import unittest
 
 import numpy as np
 import rosbag
+import rosgraph
 import rospy
 import rostest
 import tf2_ros
@@ -184,9 +185,25 @@ class ReplayTest(unittest.TestCase):
         self.assertGreater(check["coverage"], 0.95)         # and the walls the laser saw are in the map
 
     def test_6_pause_and_reset_services(self):
+        """Paused, the node leaves its scan and TF subscriptions (a paused robot's mapping costs nothing) and
+        takes them again when resumed."""
         pause = rospy.ServiceProxy("pause_mapping", SetBool)
+
+        def subscribed() -> set:
+            subs = rosgraph.Master("/test_replay").getSystemState()[1]
+            return {topic for topic, nodes in subs if "/mbzirc2020_1/hector_mapping" in nodes}
+        def settles(check) -> bool:                          # the master hears of it from the node's thread
+            deadline = time.time() + 5.0
+            while not check(subscribed()) and time.time() < deadline:
+                time.sleep(0.1)
+            return check(subscribed())
+        both = {rospy.resolve_name("scan"), "/tf"}
+        self.assertTrue(settles(lambda subs: both <= subs))
         self.assertTrue(pause(True).success)
+        self.assertTrue(settles(lambda subs: not both & subs))
+        self.assertTrue(pause(True).success)                # twice: no error
         self.assertTrue(pause(False).success)
+        self.assertTrue(settles(lambda subs: both <= subs))
         reset = rospy.ServiceProxy("reset_map", Trigger)
         self.assertTrue(reset().success)
         grid = rospy.ServiceProxy("dynamic_map", GetMap)().map

@@ -128,11 +128,14 @@ class HectorMappingNode:
         self.pause_srv = rospy.Service("pause_mapping", SetBool, self._on_pause)
         rospy.Subscriber("syscommand", String, self._on_syscommand, queue_size=10)
         rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose, queue_size=2)
-        rospy.Subscriber(str(p["scan_topic"]), LaserScan, self._on_scan,
-                         queue_size=int(p["scan_subscriber_queue_size"]), buff_size=1 << 20)
+        self.scan_sub = self._subscribe_scans()
         period = float(p["map_pub_period"])
         # not rospy.Timer: its thread dies when /clock goes back (mbzirc_ros_utils.periodic)
         self.map_timer = PeriodicTimer(max(period, 0.05), self._on_map_timer, 'hector map publication')
+
+    def _subscribe_scans(self) -> rospy.Subscriber:
+        return rospy.Subscriber(str(self.p["scan_topic"]), LaserScan, self._on_scan,
+                                queue_size=int(self.p["scan_subscriber_queue_size"]), buff_size=1 << 20)
 
     # ---- scans ---------------------------------------------------------------------------------
     def _on_scan(self, msg: LaserScan) -> None:
@@ -338,8 +341,21 @@ class HectorMappingNode:
         return TriggerResponse(success=True, message="map and pose reset")
 
     def _on_pause(self, req) -> SetBoolResponse:
-        self.paused = bool(req.data)
-        state = "paused" if self.paused else "resumed"
+        """Paused, the node also leaves its scan and TF subscriptions: a robot's mapping paused away from the
+        buildings (indoor_localization's mapping gate) then costs nothing, where reading every robot's TF
+        at the simulator's rate was most of what a paused node spent. Resumed, it subscribes again; the
+        buffer keeps the static transforms (the laser's mount)."""
+        paused = bool(req.data)
+        with self.lock:
+            changed, self.paused = paused != self.paused, paused
+            if changed and paused:
+                self.scan_sub.unregister()
+                self.tf_listener.unregister()
+            elif changed:
+                self.tf_listener = tf2_ros.TransformListener(self.tf_buffer)
+                self.scan_sub = self._subscribe_scans()
+                self._prior_yaw = None
+        state = "paused" if paused else "resumed"
         rospy.loginfo(f"hector_mapping: mapping {state}")
         return SetBoolResponse(success=True, message=f"mapping {state}")
 

@@ -2,7 +2,8 @@
 
 Runs in the robot's namespace: subscribes `ual/pose`, `ual/gnss_status`, `slam_out_pose` and (for the
 refinement by the building's outline) `scan`; publishes `localization/pose`, `localization/source` and the TF
-arena -> `<ns>/map`.
+arena -> `<ns>/map`; pauses and resumes hector_mapping (its `pause_mapping` and `reset_map` services) by the
+distance to the buildings (mapping_gate.py).
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from rospy.numpy_msg import numpy_msg
 from geometry_msgs.msg import PoseStamped, Quaternion, TransformStamped
 from sensor_msgs.msg import LaserScan, NavSatStatus
 from std_msgs.msg import String
+from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
 from mbzirc_arena.arena import load_arena
@@ -24,6 +26,7 @@ from mbzirc_arena.messages import GLOBAL_FRAME
 from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .anchor import IndoorPose, Params
+from .mapping_gate import MappingGate
 from .outline import IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams, outline_faces
 
 SOURCE_CHECK_PERIOD = 0.2    # s of ROS time: how often a silent SLAM pose is noticed
@@ -114,6 +117,15 @@ class IndoorPoseNode:
         arena = load_arena(world) if world else ARENA      # its public outline only
         self.core = IndoorPose(params_from_ros(Params, ""), arena.footprints)
         self.outline = OutlineRefinement(arena) if bool(g("~outline_refinement", True)) else None
+        resume, pause = float(g("~resume_mapping_within", 8.0)), float(g("~pause_mapping_beyond", 10.0))
+        if 0 < pause < resume:
+            rospy.logerr(f"indoor_pose: ~resume_mapping_within {resume} m is beyond ~pause_mapping_beyond {pause} m: "
+                         f"resuming within {pause} m")
+            resume = pause
+        self.gate = MappingGate(arena.footprints, resume, pause)
+        self.mapping_applied = True          # hector_mapping matches from its start
+        self.pause_mapping = rospy.ServiceProxy(str(g("~pause_mapping_service", "pause_mapping")), SetBool)
+        self.reset_map = rospy.ServiceProxy(str(g("~reset_map_service", "reset_map")), Trigger)
         ns = rospy.get_namespace().strip("/")
         self.map_frame = str(g("~map_frame", f"{ns}/map" if ns else "map"))
         self.arena_frame = str(g("~arena_frame", GLOBAL_FRAME))
@@ -131,10 +143,16 @@ class IndoorPoseNode:
         self.subs = [rospy.Subscriber("ual/pose", PoseStamped, self.on_reported, queue_size=5),
                      rospy.Subscriber("ual/gnss_status", NavSatStatus, self.on_gnss, queue_size=5),
                      rospy.Subscriber("slam_out_pose", PoseStamped, self.on_slam, queue_size=5)]
-        if self.outline is not None:
-            # numpy_msg: the ranges as an array, not a tuple of 720 floats (every scan is read, 1 in 3 used)
-            self.subs.append(rospy.Subscriber("scan", numpy_msg(LaserScan), self.outline.on_scan, queue_size=2))
+        self.scan_sub = self._subscribe_scans()
         self.timer = PeriodicTimer(SOURCE_CHECK_PERIOD, self.on_timer, "indoor pose source")
+
+    def _subscribe_scans(self):
+        """The scans of the outline refinement (None without it); not while hector_mapping is paused: they
+        are used only with its poses."""
+        if self.outline is None:
+            return None
+        # numpy_msg: the ranges as an array, not a tuple of 720 floats (every scan is read, 1 in 3 used)
+        return rospy.Subscriber("scan", numpy_msg(LaserScan), self.outline.on_scan, queue_size=2)
 
     # ---------------------------------------------------------------- callbacks
     def on_reported(self, msg: PoseStamped) -> None:
@@ -147,6 +165,8 @@ class IndoorPoseNode:
         now = rospy.get_time()
         with self.lock:
             self.core.on_gnss(now, msg.status >= NavSatStatus.STATUS_FIX)
+            if not self.core.gnss_valid:
+                self.gate.update(False, math.nan, math.nan)
             source = self.core.source(now)
         self._log()
         self._send_source(source, now)
@@ -187,7 +207,40 @@ class IndoorPoseNode:
         now = rospy.get_time()
         with self.lock:
             source = self.core.source(now)
+            last = self.core.reported.latest()       # (t, x, y, z, yaw)
+            if last is not None:
+                self.gate.update(self.core.gnss_valid, last[1], last[2])
         self._send_source(source, now)
+        self._apply_mapping_gate()
+
+    def _apply_mapping_gate(self) -> None:
+        """Pause hector_mapping, or resume it on a new map, as the gate says (retried while its services are
+        not there). The core expects the new map before the reset: no pose of the old one comes after it
+        (hector_mapping is paused until the last call)."""
+        with self.lock:
+            want = self.gate.running
+        if want == self.mapping_applied:
+            return
+        try:
+            if want:
+                with self.lock:
+                    self.core.expect_new_map()
+                self.reset_map()
+            self.pause_mapping(not want)
+        except (rospy.ServiceException, rospy.ROSException) as e:
+            rospy.logwarn_throttle(THROTTLE, f"indoor_pose: could not {'resume' if want else 'pause'} "
+                                             f"hector_mapping: {e}")
+            return
+        self.mapping_applied = want
+        if want and self.scan_sub is None:
+            self.scan_sub = self._subscribe_scans()
+        elif not want and self.scan_sub is not None:
+            self.scan_sub.unregister()
+            self.scan_sub = None
+        self._log()
+        rospy.loginfo("indoor_pose: hector_mapping " + (
+            f"resumed on a new map (within {self.gate.resume_within:.0f} m of a building or no fix)" if want
+            else f"paused (on GNSS, more than {self.gate.pause_beyond:.0f} m from every building)"))
 
     # ---------------------------------------------------------------- helpers
     def _send_source(self, source: str, now: float) -> None:
@@ -213,7 +266,9 @@ class IndoorPoseNode:
 
     def shutdown(self) -> None:
         self.timer.shutdown()
-        for s in self.subs:
+        for proxy in (self.pause_mapping, self.reset_map):
+            proxy.close()
+        for s in self.subs + ([self.scan_sub] if self.scan_sub is not None else []):
             s.unregister()
 
 
