@@ -1,8 +1,9 @@
 # The project's commands. Every target first runs the idempotent setup (apt, venv, catkin_make).
 #   make mission   run the Challenge 3 mission in simulation (headless)  SEED= UAVS= RTF= RECORD=1 SUMMARY=
-#                  UNCERTAINTY=realistic (GNSS error, unknown water and heat, laser dropouts; default ideal)
-#                  INDOOR_SLAM=1 (hector_mapping + the anchored indoor pose on the robots that go indoors)
-#                  GNSS_DENIED_INDOORS=1 (no GNSS inside buildings; turns INDOOR_SLAM on unless given)
+#                  UNCERTAINTY=realistic (GNSS error and none indoors, unknown water and heat, laser dropouts;
+#                  default ideal)  GNSS_DENIED_INDOORS=0|1 (default: as the uncertainty profile says)
+#                  INDOOR_SLAM=0|1 (hector_mapping + the anchored indoor pose on the robots that go indoors;
+#                  default: on wherever GNSS is denied indoors)  INDOOR_SEARCH=explore|plan  WORLD=path.yaml
 #                  GCS=0 (no web ground station; it is on http://127.0.0.1:8088/ by default)  GCS_PORT=
 #   make replay BAG=results/.../mission.bag   replay a recorded trial on the ground station page  GCS_PORT=
 #                  (without BAG: the page lists the recordings under results/ to pick one)
@@ -25,7 +26,7 @@ UNCERTAINTY ?= ideal
 INDOOR_SLAM ?=
 GNSS_DENIED_INDOORS ?=
 WORLD ?=
-INDOOR_SEARCH ?= plan
+INDOOR_SEARCH ?= explore
 
 .PHONY: setup build mission replay test test-faults bench lint clean
 setup:

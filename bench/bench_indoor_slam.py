@@ -266,8 +266,9 @@ def mission_cost(args: argparse.Namespace) -> int:
     runs = {}
     with tempfile.TemporaryDirectory(prefix="indoor_slam_mission_") as out_root:
         for slam in (False, True):
+            # GNSS indoors in both (without SLAM a robot without it would hold at its window): the cost alone
             ns = argparse.Namespace(uavs=3, rtf=args.rtf, duration=args.mission_duration, uncertainty=args.uncertainty,
-                                    indoor_slam=slam)
+                                    indoor_slam="yes" if slam else "no", gnss_denied_indoors="no")
             r = run_seed(args.mission_seed, ns, os.path.join(out_root, "slam" if slam else "base"))
             runs["indoor_slam" if slam else "without"] = {k: r.get(k) for k in (
                 "fires_extinguished", "crashes", "sim_time_s", "real_time_factor", "cpu_s_per_sim_s", "error")}

@@ -9,15 +9,15 @@ whole run (_node_cpu.py), and the water efficiency of indoor / facade pours (lit
 pumped at holders of that kind, pooled over the runs, from each summary's `water_efficiency`). Long: about 20/RTF minutes per seed (less when every fire is out early).
     python bench/bench_mission.py --seeds 10 [--first-seed 1] [--rtf 4] [--uavs 3] [--duration 1200]
     python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3   (seeds 101-120, never tuned on)
-    python bench/bench_mission.py --uncertainty realistic --seeds 20 --rtf 3 --indoor-search explore --gnss-denied-indoors
     ... --world c3_floor_plan_b   (another floor plan: other interior walls, doorways and indoor fire places)
+    ... --indoor-search plan --gnss-denied-indoors no   (the first wave's aids: the interior read, GNSS indoors)
 The seed count also comes from MISSION_BENCH_SEEDS (for `make bench`). `--uncertainty realistic` runs the
-trial with the real one's uncertainty (ual_sim README, "Uncertainty"), starts at seed 101 unless
---first-seed says otherwise, and writes bench/results/mission_realistic.json. Issue 18's trial:
-`--indoor-search explore` (nothing read of the interior walls or indoor holders) and `--gnss-denied-indoors`
-(no GNSS in the tower, the robots on hector_mapping there: INDOOR_SLAM on); each adds its name to the result
-file's (mission_realistic_explore_gnss_denied.json). Per seed also: indoor fires out, and the indoor flights'
-SLAM pose error against the truth (summary.json `indoor_flights`, referee side).
+trial with the real one's uncertainty (ual_sim README, "Uncertainty": no GNSS in the tower, the robots on
+hector_mapping there) and starts at seed 101 unless --first-seed says otherwise. The indoor search is
+`explore` by default (nothing read of the interior walls or indoor holders); `--gnss-denied-indoors yes|no`
+overrides the profile. The result file's name says what ran: mission[_realistic][_explore][_gnss_denied]
+[_<world>].json (issue 18's trial: mission_realistic_explore_gnss_denied.json). Per seed also: indoor fires
+out, and the indoor flights' SLAM pose error against the truth (summary.json `indoor_flights`, referee side).
 """
 from __future__ import annotations
 
@@ -35,11 +35,12 @@ from _node_cpu import KINDS, NodeCpuSampler, per_sim_second
 
 def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
     out = os.path.join(out_root, f"seed_{seed}")
-    denied = getattr(args, "gnss_denied_indoors", False)
+    switch = {"profile": "", "yes": "1", "no": "0", "": ""}     # run_mission.sh's: "" = the default
     cmd = ["bash", os.path.join(ROOT, "tools", "run_mission.sh"), f"SEED={seed}", f"UAVS={args.uavs}",
            f"RTF={args.rtf}", f"OUT={out}", f"DURATION={args.duration}", "QUIET=1",
-           f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SEARCH={getattr(args, 'indoor_search', 'plan')}",
-           f"GNSS_DENIED_INDOORS={'1' if denied else ''}", f"INDOOR_SLAM={int(denied or getattr(args, 'indoor_slam', False))}",
+           f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SEARCH={getattr(args, 'indoor_search', 'explore')}",
+           f"GNSS_DENIED_INDOORS={switch[getattr(args, 'gnss_denied_indoors', 'profile')]}",
+           f"INDOOR_SLAM={switch[getattr(args, 'indoor_slam', '')]}",
            f"WORLD={world_path(getattr(args, 'world', ''))}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -118,12 +119,21 @@ def world_path(world: str) -> str:
     return named
 
 
+def gnss_denied(args: argparse.Namespace) -> bool:
+    """Whether the run has no GNSS indoors: the switch, or (`profile`) what the world's profile says."""
+    if args.gnss_denied_indoors != "profile":
+        return args.gnss_denied_indoors == "yes"
+    from ual_sim.uncertainty import profile
+    from ual_sim.world import load_world
+    return profile(load_world(world_path(args.world) or None).uncertainty, args.uncertainty).gnss.denied_indoors
+
+
 def result_name(args: argparse.Namespace) -> str:
     """bench/results file name: mission[_<uncertainty>][_explore][_gnss_denied][_<world>]."""
     name = "mission" if args.uncertainty == "ideal" else f"mission_{args.uncertainty}"
     if args.indoor_search == "explore":
         name += "_explore"
-    name += "_gnss_denied" if args.gnss_denied_indoors else ""
+    name += "_gnss_denied" if gnss_denied(args) else ""
     world = getattr(args, "world", "")
     return name + (f"_{os.path.splitext(os.path.basename(world))[0]}" if world else "")
 
@@ -154,7 +164,7 @@ def summarize(runs: list, args: argparse.Namespace) -> dict:
                                             "load_average_end", "water_efficiency", "indoor_out", "indoor_total",
                                             "slam_error_m", "error")} for r in runs],
     }
-    res["indoor_search"], res["gnss_denied_indoors"] = args.indoor_search, args.gnss_denied_indoors
+    res["indoor_search"], res["gnss_denied_indoors"] = args.indoor_search, gnss_denied(args)
     res["world"] = os.path.basename(args.world) if args.world else "default"
     res["all_indoor_out_ratio"] = round(sum(1 for r in ok if r.get("indoor_total") and r["indoor_out"] == r["indoor_total"])
                                         / len(runs), 3) if runs else None
@@ -177,10 +187,12 @@ def main() -> int:
     ap.add_argument("--rtf", type=float, default=4.0)
     ap.add_argument("--uavs", type=int, default=3)
     ap.add_argument("--duration", type=float, default=1200.0)
-    ap.add_argument("--indoor-search", choices=("plan", "explore"), default="plan",
-                    help="explore: the robots search indoors on their laser, nothing read of the interior (issue 18)")
-    ap.add_argument("--gnss-denied-indoors", action="store_true",
-                    help="no GNSS inside buildings; the robots fly there on hector_mapping (INDOOR_SLAM on)")
+    ap.add_argument("--indoor-search", choices=("explore", "plan"), default="explore",
+                    help="explore: the robots search indoors on their laser, nothing read of the interior (issue 18); "
+                         "plan: the first wave's plan read from the simulator's interior")
+    ap.add_argument("--gnss-denied-indoors", choices=("profile", "yes", "no"), nargs="?", default="profile",
+                    const="yes", help="no GNSS inside buildings (the robots fly there on hector_mapping): as the "
+                                      "uncertainty profile says (realistic: yes), or yes / no")
     ap.add_argument("--world", default="",
                     help="a ual_sim world yaml, or the name of one of ual_sim's (c3_floor_plan_b: other interior "
                          "walls, doorways and indoor fire places); its name is added to the result file's")

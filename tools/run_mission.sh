@@ -3,19 +3,20 @@
 #   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
 #                        [GCS=1] [GCS_PORT=8088]   (GCS=0: no web ground station)
 #                        [UNCERTAINTY=ideal|realistic]   (the trial's uncertainty, ual_sim README)
-#                        [INDOOR_SLAM=0|1]   (hector_mapping + indoor_pose per indoor robot, mbzirc_launchers README)
 #                        [GNSS_DENIED_INDOORS=|0|1]   (no GNSS inside buildings, ual_sim README "No GNSS indoors";
-#                         empty: as the uncertainty profile says; 1 turns INDOOR_SLAM on unless it is given:
-#                         the agents then fly indoors on the SLAM pose, mbzirc_agents README "Pose source")
+#                         empty: as the uncertainty profile says: realistic denies it, ideal does not)
+#                        [INDOOR_SLAM=|0|1]   (hector_mapping + indoor_pose per indoor robot, mbzirc_launchers README;
+#                         empty: on wherever GNSS is denied indoors: the agents then fly there on the SLAM pose,
+#                         mbzirc_agents README "Pose source")
 #                        [WORLD=path.yaml]   (a ual_sim world; default: ual_sim's C3 world)
-#                        [INDOOR_SEARCH=plan|explore]   (mbzirc_launchers README, c3_sim.launch arg indoor_search)
+#                        [INDOOR_SEARCH=explore|plan]   (mbzirc_launchers README, c3_sim.launch arg indoor_search)
 # Ends after 20 simulated minutes or when every fire is out; writes summary.json, report.png (and
 # mission.bag with RECORD=1) into results/mission_<time>_seed<SEED>/ (or OUT=dir). Uses a free ROS master
 # port so it never clashes with another roscore on this machine.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
-INDOOR_SLAM=""; GNSS_DENIED_INDOORS=""; WORLD=""; INDOOR_SEARCH=plan
+INDOOR_SLAM=""; GNSS_DENIED_INDOORS=""; WORLD=""; INDOOR_SEARCH=explore
 SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
@@ -34,10 +35,10 @@ done
 [[ "$GNSS_DENIED_INDOORS" =~ ^(|0|1)$ && "$INDOOR_SLAM" =~ ^(|0|1)$ ]] \
   || { echo "run_mission.sh: GNSS_DENIED_INDOORS and INDOOR_SLAM must be 0 or 1 (or empty)" >&2; exit 2; }
 denied=""; [ "$GNSS_DENIED_INDOORS" = 1 ] && denied=true; [ "$GNSS_DENIED_INDOORS" = 0 ] && denied=false
+slam=""; [ "$INDOOR_SLAM" = 1 ] && slam=true; [ "$INDOOR_SLAM" = 0 ] && slam=false
 # without GNSS indoors the agents need the SLAM pose there (else they stop at the window: no trusted pose)
-[ -z "$INDOOR_SLAM" ] && { [ "$denied" = true ] && INDOOR_SLAM=1 || INDOOR_SLAM=0; }
-[ "$denied" = true ] && [ "$INDOOR_SLAM" = 0 ] \
-  && echo "run_mission.sh: warning: GNSS_DENIED_INDOORS=1 with INDOOR_SLAM=0: robots entering a building will hold there (no trusted pose)" >&2
+[ "$INDOOR_SLAM" = 0 ] && { [ "$denied" = true ] || { [ -z "$denied" ] && [ "$UNCERTAINTY" != ideal ]; }; } \
+  && echo "run_mission.sh: warning: GNSS denied indoors with INDOOR_SLAM=0: robots entering a building will hold there (no trusted pose)" >&2
 record=false; [ "$RECORD" = 1 ] || [ "$RECORD" = true ] && record=true
 smach_debug=false; [ "$SMACH_DEBUG" = 1 ] || [ "$SMACH_DEBUG" = true ] && smach_debug=true
 # shellcheck disable=SC1091
@@ -50,12 +51,12 @@ PORT="$(python -c 'import socket; s=socket.socket(); s.bind(("localhost", 0)); p
 export ROS_MASTER_URI="http://localhost:$PORT" ROS_HOSTNAME=localhost
 export ROS_LOG_DIR="$OUT/ros_logs"
 LOG="$OUT/launch.log"
-echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, indoor SLAM $INDOOR_SLAM, GNSS denied indoors ${denied:-as the profile}, indoor search $INDOOR_SEARCH, world ${WORLD:-default}, record $record -> $OUT (master port $PORT)"
+echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, indoor SLAM ${slam:-where GNSS is denied}, GNSS denied indoors ${denied:-as the profile}, indoor search $INDOOR_SEARCH, world ${WORLD:-default}, record $record -> $OUT (master port $PORT)"
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
   rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
   duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" \
-  indoor_slam:="$([ "$INDOOR_SLAM" = 1 ] && echo true || echo false)" gnss_denied_indoors:="$denied" \
+  indoor_slam:="$slam" gnss_denied_indoors:="$denied" \
   world:="$WORLD" indoor_search:="$INDOOR_SEARCH" > "$LOG" 2>&1 &
 LAUNCH_PID=$!
 GCS_PID=""

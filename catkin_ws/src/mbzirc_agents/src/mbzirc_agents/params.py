@@ -197,10 +197,11 @@ class AgentParams:
     door_inside: List[float] = _param(list(C.UGV_DOOR_INSIDE), 'UGV: x, y just inside the door', lengths=(2,))
     indoor_search_path: List[List[float]] = _param(_points(C.UGV_INDOOR_PATH), 'UGV: x, y[, yaw] of the '
                                                    'indoor viewpoints', lengths=(2, 3))
-    indoor_search: str = _param('plan', "search_indoor: 'plan' follows the goal's path (UGV: and "
-                                '~indoor_search_path) only; \'explore\' then explores the floor on the laser\'s free '
-                                'space (tasks/explore.py; UGV: the door only, no ~indoor_search_path)',
-                                choices=('plan', 'explore'))
+    indoor_search: str = _param('explore', "search_indoor: 'explore' follows the goal's path, then explores the "
+                                "floor on the laser's free space (tasks/explore.py; UGV: the door only, no "
+                                "~indoor_search_path); 'plan' follows the goal's path (UGV: and ~indoor_search_path) "
+                                "only (the first wave's plan, read from the simulator's interior: a test aid)",
+                                choices=('explore', 'plan'))
     explore_budget: float = _param(300.0, 's at most of exploring a floor, after the path')
     explore_headings: int = _param(0, 'headings of a look around on the spot while exploring (thermal camera); 0: '
                                    'enough for ~forward_camera_fov to cover the whole turn')

@@ -164,11 +164,14 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
     of its need the fire already holds (a top-up of a fire left nearly out by a tank that ran dry).
     Returns a dict: pumped, into (L into the fire), progress, status, extinguished, message, misses, ual."""
     from ual_sim.sim import Simulation
-    from ual_sim.uncertainty import profile
+    from ual_sim.uncertainty import profile, with_gnss_denied_indoors
     from ual_sim.world import load_world
     from mbzirc_agents.uav_agent import UavAgent
     world = load_world()
-    sim = Simulation(world, seed=seed, uncertainty=profile(world.uncertainty, profile_name))
+    # the fix indoors too: a pour is measured on the UAL's pose (no SLAM here), with the GNSS error of the
+    # profile; a pose without GNSS indoors is indoor_localization's (its own tests)
+    sim = Simulation(world, seed=seed, uncertainty=with_gnss_denied_indoors(profile(world.uncertainty, profile_name),
+                                                                            False))
     i = indoor_fire(sim, holder)
     fire = sim.fires.fires[i]
     if need is not None:

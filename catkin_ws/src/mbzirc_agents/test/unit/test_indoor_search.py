@@ -16,7 +16,8 @@ def ugv_inside():
     """The UGV at the last viewpoint of its ground-floor search path, inside the tower."""
     be = FakeBackend()
     last = C.UGV_INDOOR_PATH[-1]
-    agent, ual = start_ugv(be, (last[0], last[1], 0.0), {'check_fire_time': 1.0})
+    # searching back along its path (`~indoor_search plan`); exploring is test_explore_search's
+    agent, ual = start_ugv(be, (last[0], last[1], 0.0), {'check_fire_time': 1.0, 'indoor_search': 'plan'})
     ual.follow_velocity = True                   # the way out through the door is laser guided
     scene = LaserScene(be, ual, laser_z=0.9)
     yield agent, ual, be

@@ -71,7 +71,8 @@ class VelocityFeed:
 @pytest.fixture
 def uav():
     be = FakeBackend()
-    agent, ual = start_uav(be, speedup=1.0)
+    # the legs of a given path (`~indoor_search plan`): what these tests guard; exploring is test_explore_search's
+    agent, ual = start_uav(be, {'indoor_search': 'plan'}, speedup=1.0)
     ual.follow_velocity = True
     ual.altimeter = False                                   # the scene's, over its shifted ground
     s = be.servers['take_off_action']
@@ -497,7 +498,8 @@ def ugv():
     """The UGV in front of the facade B door; the world 0.8 m east of the arena model (door x 13.8-16.3)."""
     be = FakeBackend()
     out = C.UGV_DOOR_OUTSIDE
-    agent, ual = start_ugv(be, (out[0], out[1], 0.0), {'check_fire_time': 1.0}, speedup=1.0)
+    # the legs of its search path (`~indoor_search plan`): what these tests guard; exploring is test_explore_search's
+    agent, ual = start_ugv(be, (out[0], out[1], 0.0), {'check_fire_time': 1.0, 'indoor_search': 'plan'}, speedup=1.0)
     ual.follow_velocity = True
     ual.yaw = math.pi / 2
     be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)

@@ -160,11 +160,12 @@ class CentralUnit:
 
     @staticmethod
     def _indoor_search() -> str:
-        """`~indoor_search`: plan (the transitional private plan) or explore (rooms = the windows)."""
-        mode = str(rospy.get_param("~indoor_search", "plan"))
+        """`~indoor_search`: explore (rooms = the windows: what a team knows) or plan (the first wave's plan
+        read from the simulator's interior walls and indoor holders: a test aid)."""
+        mode = str(rospy.get_param("~indoor_search", "explore"))
         if mode not in INDOOR_SEARCHES:
-            rospy.logerr("central_unit: ~indoor_search %r is not one of %s: using 'plan'", mode, INDOOR_SEARCHES)
-            return "plan"
+            rospy.logerr("central_unit: ~indoor_search %r is not one of %s: using 'explore'", mode, INDOOR_SEARCHES)
+            return "explore"
         return mode
 
     @staticmethod

@@ -38,9 +38,9 @@ def test_building_volumes_are_the_outline_below_the_roof(world):
     assert inside_building([30.0, 12.0, 2.0], v)
 
 
-def test_off_by_default_in_both_profiles(world):
-    for name in ("ideal", "realistic"):
-        assert not profile(world.uncertainty, name).gnss.denied_indoors
+def test_denied_in_the_realistic_profile_only(world):
+    assert not profile(world.uncertainty, "ideal").gnss.denied_indoors
+    assert profile(world.uncertainty, "realistic").gnss.denied_indoors
 
 
 def test_profile_switch_and_its_errors():
@@ -137,7 +137,8 @@ def test_a_hovering_uav_indoors_drifts_with_its_dead_reckoning(world):
 def test_outdoors_nothing_changes_when_the_switch_is_on(world):
     """A robot that never enters a building reports bit for bit the same poses with or without the model
     (the model draws only when a fix is lost)."""
-    off = Simulation(load_world(), seed=3, uncertainty=profile(world.uncertainty, "realistic"), wind=False)
+    off = Simulation(load_world(), seed=3, uncertainty=with_gnss_denied_indoors(profile(world.uncertainty, "realistic"), False),
+                     wind=False)
     on = Simulation(load_world(), seed=3, uncertainty=denied(world, "realistic"), wind=False)
     for s in (off, on):
         s.robots[2].take_off(3.0)
