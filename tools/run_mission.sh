@@ -65,20 +65,27 @@ if [ "$GCS" != 0 ]; then   # the web ground station, beside the trial (its own l
   GCS_PID=$!
 fi
 gcs_shown=0
-stop_gcs() {   # Ctrl+C, then its whole group after 10 s (a `roslaunch --wait` whose master never came)
+# Ctrl+C to a roslaunch (its own session: setsid), then TERM to its whole group after $2 half-seconds, then
+# KILL 5 s later. Why the KILL: a ground station's roslaunch outlived a benchmark's trial (its master gone, INT
+# and TERM not acted on), still holding its port and CPU when the next trial started.
+running() { ps -o stat= -p "$1" 2>/dev/null | grep -qv '^Z'; }   # not gone, nor a zombie child not yet waited for
+stop_group() {
+  local pid="$1" tries="$2"
+  kill -INT "$pid" 2>/dev/null
+  for _ in $(seq 1 "$tries"); do running "$pid" || return 0; sleep 0.5; done
+  kill -TERM -- "-$pid" 2>/dev/null
+  for _ in $(seq 1 10); do running "$pid" || return 0; sleep 0.5; done
+  echo "mission: process group $pid did not stop on INT and TERM: killed" >&2
+  kill -KILL -- "-$pid" 2>/dev/null
+}
+stop_gcs() {   # also a `roslaunch --wait` whose master never came
   [ -n "$GCS_PID" ] || return 0
-  kill -INT "$GCS_PID" 2>/dev/null
-  for _ in $(seq 1 20); do kill -0 "$GCS_PID" 2>/dev/null || break; sleep 0.5; done
-  kill -TERM -- "-$GCS_PID" 2>/dev/null
+  stop_group "$GCS_PID" 20
   wait "$GCS_PID" 2>/dev/null; GCS_PID=""
 }
 stop() {
   stop_gcs
-  if kill -0 "$LAUNCH_PID" 2>/dev/null; then
-    kill -INT "$LAUNCH_PID" 2>/dev/null
-    for _ in $(seq 1 30); do kill -0 "$LAUNCH_PID" 2>/dev/null || break; sleep 0.5; done
-    kill -TERM -- "-$LAUNCH_PID" 2>/dev/null
-  fi
+  running "$LAUNCH_PID" && stop_group "$LAUNCH_PID" 30
 }
 trap 'echo; echo "mission: interrupted"; stop; exit 130' INT TERM
 

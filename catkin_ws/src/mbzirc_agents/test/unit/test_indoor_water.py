@@ -1033,18 +1033,23 @@ def test_realistic_105_the_look_around_never_turns_onto_a_faint_warm_area_beside
         f'turned {sc.ual.yaw - yaw0[0]:+.2f} rad onto a faint warm area'
 
 
-@pytest.mark.parametrize('window', [True, False])
+@pytest.mark.parametrize('window', ['window', 'jamb beside the bearing', None])
 def test_seed_106_a_warm_area_seen_through_a_window_beside_the_fire_is_not_taken_for_it(scenes, window):
     """Explore + GNSS-denied seed 106: in1_w, 98 % out and too faint to see, stands beside a window; four
     top-ups each looked around, took the warmest area, 33 deg off the heading and 29-37 degC over its wall
     (the sun-heated outside, through the window), and poured their whole tank there. The laser places a
     warm area: along its bearing a window (no return) is not the fire; a wall 0.85 m beside the fire's
-    estimate may be (its GNSS error: realistic seed 103), and the robot turns onto it."""
+    estimate may be (its GNSS error: realistic seed 103), and the robot turns onto it. Seed 109 on fb42812:
+    the window's jamb 0.1 m beside the bearing, within the corridor the laser places it by, the outside seen
+    past it: the bearing itself must meet the surface (before: turned onto it, a tank poured outside twice)."""
     from laser_world import LaserScene
     sc = scenes(hot_until=0.0)
     laser = LaserScene(sc.be, sc.ual, noisy=False)
-    wall = [(4.05, -0.5, 4.25, 5.0), (4.05, -5.0, 4.25, -2.0)] if window else [(4.05, -5.0, 4.25, 5.0)]
-    laser.boxes = wall                     # the fire's wall (x 4.05), a window at y -2.0..-0.5 in it or not
+    # the fire's wall (x 4.05), a window at y -2.0..-0.5 in it, or -2.0..-0.75 (the bearing crosses the wall at
+    # y -0.85: 0.1 m past the jamb), or none
+    jamb = {'window': -0.5, 'jamb beside the bearing': -0.75}.get(window)
+    wall = [(4.05, jamb, 4.25, 5.0), (4.05, -5.0, 4.25, -2.0)] if window else [(4.05, -5.0, 4.25, 5.0)]
+    laser.boxes = wall
     sc.threads = (laser,)
     sc.be.clock.sleep(0.5)
     rng = np.random.default_rng(7)

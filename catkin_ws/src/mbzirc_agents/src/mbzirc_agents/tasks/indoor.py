@@ -43,6 +43,9 @@ LOOK_MIN_RISE = 5.0        # x ~out_contrast a warm area found beside the wateri
 LOOK_MAX_OFF = 1.5         # m from the fire's estimate where the laser may place a warm area found beside the view
 LOOK_RAY_HALF_WIDTH = 0.15  # m either side of a warm area's bearing where the laser's returns place it ...
 LOOK_RAY_REACH = 30.0      # m ... up to this far
+LOOK_RAY_CORE = 0.05       # m either side of the bearing itself: the surface the warm area is on ...
+LOOK_RAY_CORE_ANGLE = math.radians(1.5)   # ... (or this angle either side: a few beams of a 720-beam laser far off)
+LOOK_EDGE_DEPTH = 0.5      # m ... no further than this beyond the corridor's nearest return (else an edge)
 STANDOFF_SLACK = 0.25      # m nearer than ~indoor_fire_distance to the wall ahead before a UAV steps back to it
 
 
@@ -556,7 +559,8 @@ class ExtinguishIndoorFire(AgentTask):
     def _off_the_fire(self, spot, then) -> Optional[str]:
         """Why the laser places a thermal spot (seen from pose `then`) where the fire cannot be, or None: the
         wall along its bearing (wall_clearance.wall_ahead, in a corridor LOOK_RAY_HALF_WIDTH either side)
-        lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none (an opening). Unchecked (None)
+        lies beyond LOOK_MAX_OFF from the fire's estimate, or there is none (an opening), or the bearing itself
+        (LOOK_RAY_CORE either side) passes that return's edge (more than LOOK_EDGE_DEPTH further). Unchecked (None)
         without a fresh scan or an estimate. Why (explore + GNSS-denied seed 106): in1_w, 98 % out and too faint to see, stands beside a window; four top-ups each took the
         warmest area in their looks, 33 deg off, the sun-heated outside seen through the window, and poured
         their whole tank there."""
@@ -564,9 +568,18 @@ class ExtinguishIndoorFire(AgentTask):
         if points is None or self.fire_xy is None:
             return None
         bearing = float(then[3]) + pixel_bearing(spot.column, self.agent.p.forward_camera_fov)
-        r = wall_ahead(points, then[:2], (math.cos(bearing), math.sin(bearing)), LOOK_RAY_HALF_WIDTH, LOOK_RAY_REACH)
+        u = (math.cos(bearing), math.sin(bearing))
+        r = wall_ahead(points, then[:2], u, LOOK_RAY_HALF_WIDTH, LOOK_RAY_REACH)
         if r is None:
             return 'no laser return along it (an opening)'
+        # the corridor's nearest return may be a window's jamb or a wall's corner beside the bearing, with the
+        # heat seen past it (explore + GNSS-denied seed 109 on fb42812: in1_w, 98.7 % out beside a window, two
+        # top-ups turned 45 deg onto the warm outside past the window's jamb 0.1 m from their bearing and
+        # poured a tank each there): the bearing itself must meet that surface
+        core = wall_ahead(points, then[:2], u, max(LOOK_RAY_CORE, r * LOOK_RAY_CORE_ANGLE), LOOK_RAY_REACH)
+        if core is None or core > r + LOOK_EDGE_DEPTH:
+            return (f'past an edge {r:.1f} m away (its bearing meets ' +
+                    ('no return)' if core is None else f'a surface at {core:.1f} m)'))
         place = np.array(then[:2], dtype=float) + r * np.array([math.cos(bearing), math.sin(bearing)])
         off = float(np.linalg.norm(place - self.fire_xy))
         if off > LOOK_MAX_OFF:
@@ -860,10 +873,8 @@ class ExtinguishIndoorFire(AgentTask):
             return True
         if not c.locked and c.was_locked:
             c.lock_on_latest(steady=True, relock=True)   # the fire unlocked by a turn of the aim, however faint
-        elif not c.locked and c.lock_on_latest(steady=True):
-            self.agent.backend.loginfo(f'[{self.name}] fire {fire_id} not reported by the detector but '
-                                       f'{c.locked_contrast:.1f} degC over its wall in the raw thermal image: '
-                                       'seen hot, watered until it reads at its wall\'s level')
+        elif not c.locked and self._raw_seen_hot(f'fire {fire_id} not reported by the detector',
+                                                 "watered until it reads at its wall's level"):
             return True
         hot = c.answer()
         if hot is None and c.locked and not c.fresh():
@@ -1025,15 +1036,23 @@ class ExtinguishIndoorFire(AgentTask):
             if cold.seen_hot:
                 self.contrast.lock_on_latest()           # the fire as seen hot, for the raw cold check
                 return True
-            if raw_too and self.contrast.lock_on_latest(steady=True):
-                self.agent.backend.loginfo(f'[{self.name}] aimed at the fire: the detector no longer reports it, '
-                                           f'the raw thermal image shows it {self.contrast.locked_contrast:.1f} '
-                                           'degC over its wall: seen hot')
+            if raw_too and self._raw_seen_hot('aimed at the fire: the detector no longer reports it'):
                 cold.update(True)
                 return True
             if self.agent.backend.now() >= end:
                 return False
             self._wait_off_walls(0.25, self.agent.position()[3])
+
+    def _raw_seen_hot(self, why: str, then: str = '') -> bool:
+        """The raw thermal image's steady warm area, thermal_contrast.LOCK_MIN_RISE x ~out_contrast over its wall,
+        locked as the fire (True, logged with why and what follows), or none (False). The one rule by which a
+        fire the detector does not report is seen hot: a top-up's faint fire (`_hot`), a fire aimed at from so
+        near that it fills the view (`_seen_hot`)."""
+        if not self.contrast.lock_on_latest(steady=True):
+            return False
+        self.agent.backend.loginfo(f'[{self.name}] {why}, but {self.contrast.locked_contrast:.1f} degC over its wall '
+                                   f'in the raw thermal image: seen hot' + (f', {then}' if then else ''))
+        return True
 
     def _well_localised(self, fire_id: int) -> bool:
         """A confirmed track known to ~top_up_max_std: a real fire, not a stray estimate.
