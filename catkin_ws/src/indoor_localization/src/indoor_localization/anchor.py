@@ -50,7 +50,7 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
-from mbzirc_arena.buildings import in_footprint, nearest_face
+from mbzirc_arena.buildings import footprint_distance
 from mbzirc_arena.yaw import wrap_angle
 
 GNSS, SLAM, NONE = "gnss", "slam", "none"
@@ -308,7 +308,7 @@ class IndoorPose:
         self.map_z = z
 
     def _near_a_building(self, x: float, y: float) -> bool:
-        return in_footprint((x, y), self.footprints) or nearest_face((x, y), self.footprints)[1] < self.p.map_keep_near
+        return footprint_distance((x, y), self.footprints) < self.p.map_keep_near
 
     def expect_new_map(self) -> None:
         """hector_mapping is about to resume on a new, empty map (mapping_gate.py): its poses will be in a new

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
-from mbzirc_arena.buildings import in_footprint, nearest_face
+from mbzirc_arena.buildings import footprint_distance
 
 
 class MappingGate:
@@ -31,12 +31,6 @@ class MappingGate:
         self.pause_beyond = pause_beyond       # <= 0: never paused
         self.running = True                    # hector_mapping starts matching
 
-    def distance(self, x: float, y: float) -> float:
-        """Horizontal distance to the nearest building's footprint (0 inside one; inf without buildings)."""
-        if not self.footprints:
-            return math.inf
-        return 0.0 if in_footprint((x, y), self.footprints) else nearest_face((x, y), self.footprints)[1]
-
     def update(self, gnss_valid: bool, x: float, y: float) -> Optional[bool]:
         """The new state when it changes (True: resume on a new map, False: pause), else None."""
         if self.pause_beyond <= 0 or not gnss_valid:
@@ -44,7 +38,7 @@ class MappingGate:
         elif not (math.isfinite(x) and math.isfinite(y)):
             want = self.running
         else:
-            d = self.distance(x, y)
+            d = footprint_distance((x, y), self.footprints)
             want = d <= (self.pause_beyond if self.running else self.resume_within)
         if want == self.running:
             return None

@@ -165,8 +165,6 @@ class IndoorPoseNode:
         now = rospy.get_time()
         with self.lock:
             self.core.on_gnss(now, msg.status >= NavSatStatus.STATUS_FIX)
-            if not self.core.gnss_valid:
-                self.gate.update(False, math.nan, math.nan)
             source = self.core.source(now)
         self._log()
         self._send_source(source, now)

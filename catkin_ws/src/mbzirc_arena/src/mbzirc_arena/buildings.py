@@ -89,6 +89,11 @@ def in_footprint(p: Sequence[float], footprints: Sequence[Sequence[float]], marg
                for b in footprints)
 
 
+def footprint_distance(p: Sequence[float], footprints: Sequence[Sequence[float]]) -> float:
+    """Horizontal distance from p (xy) to the nearest building footprint: 0 inside one, inf without buildings."""
+    return 0.0 if in_footprint(p, footprints) else nearest_face(p, footprints)[1]
+
+
 # How far a fire estimate may lie off its wall and still be that wall's facade fire: robots place fires with
 # standard GNSS (errors of about a metre, ual_sim README "Uncertainty"), so a facade fire seen from a pose
 # off towards the building lands inside the footprint, one seen from a pose off the other way lands out in
