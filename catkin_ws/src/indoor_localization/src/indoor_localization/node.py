@@ -90,7 +90,7 @@ class OutlineRefinement:
                 self.last = t
                 pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, range_min=scan.range_min,
                                   range_max=scan.range_max)
-                found = self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset)
+                found = self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset, core.gnss_valid)
                 self._log()
             if dropped and not found:
                 self.refiner.refit(anchor)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional, Sequence
 
 import numpy as np
@@ -146,6 +146,8 @@ class RefineParams:
     yaw_prior_sigma: float = 0.1     # rad
     thickness: float = 0.25          # m: prior of the outer walls' thickness (not in the arena model) ...
     thickness_sigma: float = 0.25    # m ... and its std (set small if it is known)
+    thickness_std_floor: float = 0.03  # m: a thickness learned from the robot's own fits is never trusted more
+    indoor_takeover: bool = True     # without GNSS, the walls seen without it correct alone once they suffice
     max_std: float = 0.1             # m: a direction is corrected once the correction's std along it is below
     max_yaw_std: float = 0.03        # rad: likewise the yaw
     max_correction: float = 3.0      # m: a larger fitted correction is rejected
@@ -165,6 +167,7 @@ class WallObservation:
     points: int
     sigma_offset: float              # m: the line's offset std from its returns
     sigma_angle: float               # rad
+    gnss: bool = True                # made while the robot had a GNSS fix (outside)
 
 
 @dataclass(frozen=True)
@@ -193,13 +196,31 @@ class OutlineRefiner:
                 self.faces.append(virtual)
         self.walls: dict = {}            # (face, inner) -> deque of WallObservation
         self.dropped: set = set()        # walls the last fit dropped as inconsistent
+        # the outer walls' thickness is the building's, not the map's: what the fits learned of it outlives
+        # the observations that taught it (forgotten outdoors, cleared with a new map) as the prior
+        self.thickness_prior = (params.thickness, params.thickness_sigma)
+        self.gnss_valid = True           # as of the last scan
         self.correction = self._no_correction()
         self.events: list = []
 
     def _no_correction(self) -> Correction:
         p = self.p
-        return Correction(IDENTITY, p.thickness, 0, False, 0,
-                          np.diag([p.prior_sigma ** 2] * 2 + [p.yaw_prior_sigma ** 2, p.thickness_sigma ** 2]))
+        thickness, sigma = self.thickness_prior
+        return Correction(IDENTITY, thickness, 0, False, 0,
+                          np.diag([p.prior_sigma ** 2] * 2 + [p.yaw_prior_sigma ** 2, sigma ** 2]))
+
+    def _learn_thickness(self) -> None:
+        """Keep the fitted thickness as the prior when the fit knows it better than the prior does (before
+        its observations go). Rule: a thickness is learned only from a fit that observed it, never below
+        `thickness_std_floor` (the fit's std counts the prior it started from too), and a learned one seen
+        by the inner face alone turns that face into an offset observation: inside, the walls seen from
+        inside fix the translation without the facade seen from outside before the crossing."""
+        cov = self.correction.cov
+        if cov is None or not self.walls:
+            return
+        std = math.sqrt(max(float(cov[3, 3]), 0.0))
+        if std < self.thickness_prior[1]:
+            self.thickness_prior = (self.correction.thickness, max(std, self.p.thickness_std_floor))
 
     def forget_before(self, t: float, anchor: Anchor, refit: bool = True) -> bool:
         """Drop the observations made before t; True when some were. Outdoors, where hector_mapping's pose
@@ -207,6 +228,8 @@ class OutlineRefiner:
         entering count, as for the anchor; indoors nothing is forgotten (the walls are seen again and again,
         the last ones kept). refit False: the caller fits next (`on_scan`, or `refit`)."""
         before = sum(len(q) for q in self.walls.values())
+        if any(q and q[0].t < t for q in self.walls.values()):
+            self._learn_thickness()
         for key in list(self.walls):
             q = self.walls[key]
             while q and q[0].t < t:
@@ -226,17 +249,21 @@ class OutlineRefiner:
             self._fit(anchor)
 
     def reset(self) -> None:
-        """The SLAM map frame changed (a jump): the kept observations no longer hold."""
+        """The SLAM map frame changed (a jump, a new map): the kept observations no longer hold (what they
+        taught of the walls' thickness does)."""
+        self._learn_thickness()
         self.walls.clear()
         self.dropped.clear()
         self.correction = self._no_correction()
 
     # ---------------------------------------------------------------- one scan
     def on_scan(self, t: float, pose: tuple, z: float, anchor: Anchor, points: np.ndarray,
-                laser_offset: tuple = (0.0, 0.0)) -> list:
+                laser_offset: tuple = (0.0, 0.0), gnss_valid: bool = True) -> list:
         """pose: the SLAM pose (x, y, yaw) at the scan's stamp (map frame); z: the laser's height in the
-        arena; points: (N, 2) returns in the laser frame. Returns the wall observations it made (and keeps
-        them); fits the correction again when there is one."""
+        arena; points: (N, 2) returns in the laser frame; gnss_valid: the robot has a fix (outside).
+        Returns the wall observations it made (and keeps them); fits the correction again when there is
+        one."""
+        self.gnss_valid = gnss_valid
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         origin = (x + c * laser_offset[0] - s * laser_offset[1], y + s * laser_offset[0] + c * laser_offset[1])
@@ -255,6 +282,7 @@ class OutlineRefiner:
                 made += [((e.face, False), e) for e in self._observe_ends(t, k, inliers, pts, in_map, refined,
                                                                           robot)]
             for key, o in made:
+                o = o if gnss_valid else replace(o, gnss=False)
                 found.append(o)
                 self.walls.setdefault(key, deque(maxlen=self.p.observations_per_wall)).append(o)
         if found:
@@ -443,14 +471,39 @@ class OutlineRefiner:
 
     # ---------------------------------------------------------------- the correction
     def _fit(self, anchor: Anchor) -> None:
-        """Fit the correction on every kept observation against `anchor`. A wall that the fit of the others
-        predicts well but misses by more than `max_wall_residual` is left out (the worst first, one at a
-        time): a fit on all of them would spread its error over the others and the thickness."""
+        """Fit the correction on the kept observations against `anchor`: without GNSS, on those made
+        without it alone when they observe both directions and the yaw (`indoor_takeover`), else on every
+        one. Why: the crossing of a window or door is where hector_mapping's pose is likeliest to slip (the
+        scan turns from the facade to the room); observations from before it, in the frame before the
+        slip, held a re-entering UAV 0.15 m off for 40 s (mission seed 113, rtf 4) while the room's walls
+        seen from inside said where it was."""
         rows = self._rows(anchor)
         if rows is None:
             return
+        indoors = ~rows["gnss"]
+        if self.p.indoor_takeover and not self.gnss_valid and indoors.any() and not indoors.all():
+            corr = self._fit_rows(rows, indoors.copy(), quiet=True)
+            if corr is not None and corr.observed == 2 and corr.yaw_observed:
+                self._accept(corr)
+                return
+        corr = self._fit_rows(rows, np.ones(len(rows["key"]), dtype=bool))
+        if corr is not None:
+            self._accept(corr)
+
+    def _accept(self, corr: Correction) -> None:
+        shift = self._shift_at_pivot(corr)
+        if shift > self.p.max_correction or abs(corr.transform.theta) > self.p.max_yaw_correction:
+            self.events.append(f"outline: fitted correction {shift:.2f} m, {corr.transform.theta:+.3f} rad is "
+                               f"beyond the bounds ({self.p.max_correction} m, {self.p.max_yaw_correction} rad): "
+                               f"rejected, keeping the previous one")
+            return
+        self.correction = corr
+
+    def _fit_rows(self, rows: dict, use: np.ndarray, quiet: bool = False) -> Optional[Correction]:
+        """The correction fitted on the rows in `use`, or None. A wall that the fit of the others predicts
+        well but misses by more than `max_wall_residual` is left out (the worst first, one at a time): a fit
+        on all of them would spread its error over the others and the thickness. quiet: no log events."""
         self.dropped.clear()
-        use = np.ones(len(rows["key"]), dtype=bool)
         x = self._solve(rows, use)
         while True:
             # the fit of all walls spreads a wrong wall's error; while none is missed by half the limit
@@ -474,19 +527,11 @@ class OutlineRefiner:
             self.dropped.add(worst[0])
             use &= np.array([k != worst[0] for k in rows["key"]])
             f = self.faces[worst[0][0]]
-            self.events.append(f"outline: wall {f.name} ({'inner' if worst[0][1] else 'outer'} face) is "
-                               f"{worst[1]:+.2f} m off the fit of the others: left out")
+            if not quiet:
+                self.events.append(f"outline: wall {f.name} ({'inner' if worst[0][1] else 'outer'} face) is "
+                                   f"{worst[1]:+.2f} m off the fit of the others: left out")
             x = self._solve(rows, use)
-        if x is None:
-            return
-        corr = self._correction(rows, use, *x)
-        shift = self._shift_at_pivot(corr)
-        if shift > self.p.max_correction or abs(corr.transform.theta) > self.p.max_yaw_correction:
-            self.events.append(f"outline: fitted correction {shift:.2f} m, {corr.transform.theta:+.3f} rad is "
-                               f"beyond the bounds ({self.p.max_correction} m, {self.p.max_yaw_correction} rad): "
-                               f"rejected, keeping the previous one")
-            return
-        self.correction = corr
+        return None if x is None else self._correction(rows, use, *x)
 
     @staticmethod
     def _shift_at_pivot(corr: Correction) -> float:
@@ -510,6 +555,7 @@ class OutlineRefiner:
         rows = {"key": [key for key, _, _ in obs], "normal": np.array([fk.normal for fk in f]),
                 "offset": np.array([fk.offset for fk in f]),
                 "inner": np.array([o.inner for _, o, _ in obs], dtype=float), "g": g,
+                "gnss": np.array([o.gnss for _, o, _ in obs], dtype=bool),
                 "angle": wrap_half(np.array([o.angle + anchor.theta - fk.direction for (_, o, _), fk in zip(obs, f)])),
                 "w_off": w_off,
                 "w_ang": 1.0 / (n_obs * (np.array([o.sigma_angle for _, o, _ in obs]) ** 2 + p.angle_sigma ** 2))}
@@ -532,8 +578,9 @@ class OutlineRefiner:
         if not use.any():
             return None
         p = self.p
-        prior = np.array([0.0, 0.0, 0.0, p.thickness])
-        prior_info = np.diag([p.prior_sigma ** -2] * 2 + [p.yaw_prior_sigma ** -2, p.thickness_sigma ** -2])
+        thickness, sigma = self.thickness_prior
+        prior = np.array([0.0, 0.0, 0.0, thickness])
+        prior_info = np.diag([p.prior_sigma ** -2] * 2 + [p.yaw_prior_sigma ** -2, sigma ** -2])
         w_off, w_ang = rows["w_off"] * use, rows["w_ang"] * use
         x = prior.copy()
         for _ in range(5):

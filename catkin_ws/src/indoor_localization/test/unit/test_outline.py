@@ -178,10 +178,15 @@ def test_one_inner_face_of_unknown_thickness_corrects_nothing():
     assert corr.walls >= 1 and corr.observed == 0
     # with the thickness known, the same scans correct y
     refiner = OutlineRefiner(outline_faces(FOOTPRINTS), RefineParams(thickness=T, thickness_sigma=0.005))
+    _south_wall_alone_corrects_y(refiner, anchor, rng, 0.05)
+
+
+def _south_wall_alone_corrects_y(refiner, anchor, rng, tol):
+    """Inside, only the south wall's inner face in range (the anchor off by (0.3, 0.5)): y is corrected."""
     corr = run(refiner, anchor, [(4.0, 1.8, 0.0)] * 5, rng, range_max=2.5)
     assert corr.observed == 1
     ex, ey, _ = pose_error(refiner, anchor, 4.0, 1.8, 0.0)
-    assert abs(ey) < 0.05 and ex == pytest.approx(0.3, abs=0.02)
+    assert abs(ey) < tol and ex == pytest.approx(0.3, abs=0.02)
 
 
 def test_no_outline_wall_in_the_scan_gives_no_correction():
@@ -299,3 +304,71 @@ def test_an_end_hidden_by_something_in_front_or_where_another_building_goes_on_i
     ends = {(faces[k].building, faces[k].name, i) for k, i in corner_ends(faces)}
     assert (0, "south", 0) in ends and (0, "south", 1) not in ends        # (14, 0): the other building's
     assert (0, "east", 0) not in ends and (1, "south", 1) in ends
+
+
+def _slipped_to_map(slip):
+    """to_map of a SLAM pose that slipped by `slip` (arena x, y) at the crossing: the map frame as the
+    scans after it see it."""
+    def f(x, y, yaw):
+        return to_map(x - slip[0], y - slip[1], yaw)
+    return f
+
+
+def _enter(refiner, anchor, rng, slip, outside_scans=10):
+    """In front of the west window on GNSS (scans every 0.2 s; the node forgets what is older than 10 s),
+    then in and round the rooms without GNSS, the SLAM pose slipped by `slip` at the crossing."""
+    t = 0.0
+    for _ in range(outside_scans):
+        pts = scan_points(scan(-2.0, 5.0, 0.0, rng), -math.pi, 2 * math.pi / 720)
+        refiner.forget_before(t - 10.0, anchor, refit=False)
+        refiner.on_scan(t, to_map(-2.0, 5.0, 0.0), Z, anchor, pts, gnss_valid=True)
+        t += 0.2
+    inside = _slipped_to_map(slip)
+    for x, y, yaw in WINDOW_PATH[5:]:
+        for _ in range(3):
+            pts = scan_points(scan(x, y, yaw, rng), -math.pi, 2 * math.pi / 720)
+            refiner.on_scan(t, inside(x, y, yaw), Z, anchor, pts, gnss_valid=False)
+            t += 0.2
+    return inside
+
+
+def test_inside_the_walls_seen_without_gnss_take_over_from_a_slip_at_the_crossing():
+    """hector_mapping's pose slipped 0.15 m as the robot crossed the window: the facade seen from outside is
+    in the frame before the slip, the room's walls in the one after; the pose flown inside is the latter's."""
+    errors = {}
+    for takeover in (True, False):
+        rng = np.random.default_rng(21)
+        anchor = anchor_with_error((0.4, -0.3), 0.01)
+        refiner = OutlineRefiner(outline_faces(FOOTPRINTS), RefineParams(indoor_takeover=takeover))
+        inside = _enter(refiner, anchor, rng, slip=(0.15, 0.1))
+        refined = compose(refiner.correction.transform, anchor)
+        errs = []
+        for x, y, yaw in WINDOW_PATH[5:]:
+            ex, ey, _ = refined.apply(*inside(x, y, yaw))
+            errs.append(math.hypot(ex - x, ey - y))
+        errors[takeover] = max(errs)
+    assert errors[True] < 0.05, errors
+    assert errors[False] > 0.05, errors          # the fit on both sides of the crossing: off by about half of it
+
+
+def test_the_walls_thickness_learned_outlives_a_new_map():
+    """The thickness is the building's: after a new map (reset), one inner face corrects its normal."""
+    rng = np.random.default_rng(4)
+    anchor = anchor_with_error((0.3, 0.5), 0.0)
+    refiner = OutlineRefiner(outline_faces(FOOTPRINTS))
+    run(refiner, anchor, WINDOW_PATH, rng)
+    assert refiner.correction.thickness == pytest.approx(T, abs=0.05)
+    refiner.reset()
+    thickness, sigma = refiner.thickness_prior
+    assert thickness == pytest.approx(T, abs=0.05) and sigma == pytest.approx(RefineParams().thickness_std_floor)
+    assert refiner.correction.thickness == thickness and refiner.correction.observed == 0
+    _south_wall_alone_corrects_y(refiner, anchor, rng, 0.06)
+
+
+def test_a_fit_that_did_not_observe_the_thickness_teaches_nothing():
+    rng = np.random.default_rng(9)
+    anchor = anchor_with_error((0.6, 0.0), 0.0)
+    refiner = OutlineRefiner(outline_faces(FOOTPRINTS), RefineParams(corner_ends=False))
+    run(refiner, anchor, [(-2.0, 5.0, 0.0)] * 3, rng, range_max=4.0)   # the west facade's outer face only
+    refiner.reset()
+    assert refiner.thickness_prior == (RefineParams().thickness, RefineParams().thickness_sigma)

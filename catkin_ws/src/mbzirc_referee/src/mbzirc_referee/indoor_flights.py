@@ -195,6 +195,16 @@ class SlamRecord:
                                           on_slam_s=_overlap(p, on_slam), slam_spans=on_slam))
         return sorted(out, key=lambda f: (f["t_start"], f["robot"]))
 
+    def tracks(self) -> dict:
+        """robot -> its source changes, localization poses and true poses (3 decimals) for the robots once
+        indoors: what the flights' errors were computed from, for looking at where and when the pose
+        went off (slam_tracks.json beside summary.json)."""
+        def rounded(samples):
+            return [[round(v, 3) for v in s] for s in samples]
+        return {robot: {"sources": [[round(t, 3), s] for t, s in self.sources.get(robot, [])],
+                        "poses": rounded(self.poses.get(robot, [])), "truth": rounded(self.truth.get(robot, []))}
+                for robot in sorted(self.been_inside)}
+
     def map_floors(self, t_end: float, floor_of: Callable[[float], int]) -> dict[str, int]:
         """robot -> the floor its map belongs to: the floor of most of its time in indoor flights (robots
         never indoors have no indoor map)."""

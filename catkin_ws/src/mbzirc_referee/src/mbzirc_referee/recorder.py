@@ -209,7 +209,7 @@ class MissionRecorder:
             rospy.signal_shutdown(f"mission over: {reason}")
 
     def write(self, summary: dict) -> None:
-        """summary.json (and its extra copy), the SLAM floor maps, report.png."""
+        """summary.json (and its extra copy), the SLAM floor maps, slam_tracks.json, report.png."""
         floor_maps = {}
         try:
             summary["floor_maps"], floor_maps = self.slam_inputs.write_maps(self.out_dir, self.rec.elapsed,
@@ -222,6 +222,14 @@ class MissionRecorder:
             os.makedirs(d, exist_ok=True)
             with open(p, "w", encoding="utf-8") as f:
                 json.dump(summary, f, indent=2)
+        try:
+            with self.lock:
+                tracks = self.rec.slam.tracks()
+            if tracks:
+                with open(os.path.join(self.out_dir, "slam_tracks.json"), "w", encoding="utf-8") as f:
+                    json.dump(tracks, f, separators=(",", ":"))
+        except Exception as e:  # noqa: BLE001 - the summary matters more than the tracks
+            rospy.logerr(f"mission_recorder: slam_tracks.json failed: {e}")
         try:
             with self.lock:
                 write_report(self.rec, os.path.join(self.out_dir, "report.png"), floor_maps=floor_maps)

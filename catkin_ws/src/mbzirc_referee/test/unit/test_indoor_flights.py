@@ -148,6 +148,22 @@ def test_a_robot_indoors_on_gnss_flies_indoors_too_and_its_slam_pose_is_scored()
     assert f["samples"] == 41 and f["rms_error_m"] == pytest.approx(0.2) and rec.been_inside == {"3"}
 
 
+def test_tracks_export_what_the_errors_came_from_for_robots_once_inside_only():
+    rec = SlamRecord(footprints=(BOX,))
+    rec.set_source("3", 0.0, "gnss")
+    rec.set_source("1", 0.0, "gnss")                   # never inside: nothing to look at
+    for t, x, y, z in _slam(0.0, 40.0, offset=(0.0, 0.2)):
+        rec.add_pose("3", t, x, y, z)
+        rec.add_pose("1", t, x, y + 50.0, z)
+    for t, x, y, z in _truth(0.0, 40.0):
+        rec.add_truth("3", t, x, y, z)
+    tracks = rec.tracks()
+    assert list(tracks) == ["3"] and tracks["3"]["sources"] == [[0.0, "gnss"]]
+    assert len(tracks["3"]["poses"]) == len(rec.poses["3"]) and len(tracks["3"]["truth"]) == len(rec.truth["3"])
+    t, x, y, _ = tracks["3"]["poses"][0]
+    assert (t, x, y) == pytest.approx(rec.poses["3"][0][:3], abs=1e-3)
+
+
 def test_slam_and_indoor_periods_of_one_entry_are_one_flight():
     rec = SlamRecord(footprints=(BOX,))
     rec.set_source("2", 0.0, "gnss")
