@@ -79,6 +79,11 @@ class ClearanceKeeper:
         with self.lock:
             return self.guard.true_z(z, a.backend.now())
 
+    def true_height_of(self, gnss_z: float) -> Optional[float]:
+        """true_height() of a reported GNSS height gnss_z (a pose message's), None without an estimate."""
+        with self.lock:
+            return self.guard.true_z(gnss_z, self.agent.backend.now())
+
     def tracking(self) -> bool:
         """True while a hold's true height is tracked by the vertical velocity (clearance.py)."""
         with self.lock:

@@ -220,7 +220,7 @@ class RobotAgent(Agent):
             else:
                 self._lost_since = None
                 self.way_back.record(self.pose[:3])
-        self.pose_pub.publish(self.pose_msg)
+        self.pose_pub.publish(self._detectors_pose(self.pose_msg))
         if frame_jump:
             self.backend.logwarn(frame_jump)
         if switched:
@@ -230,6 +230,11 @@ class RobotAgent(Agent):
         if first:
             self._settle_start(np.array([x, y, p.z]))
 
+    def _detectors_pose(self, msg: PoseStamped) -> PoseStamped:
+        """The pose the robot's detectors place what they see with (agent/pose): its pose source's, at the
+        height the UAL reports (a UAV's: its true height where its altimeter tells it, UavAgent)."""
+        return msg
+
     @staticmethod
     def _arena_pose_msg(msg: PoseStamped, x: float, y: float) -> PoseStamped:
         """msg with the arena (x, y) of the pose source (the data_feed's pose)."""
@@ -237,6 +242,15 @@ class RobotAgent(Agent):
         out.header = msg.header
         out.pose.orientation = msg.pose.orientation
         out.pose.position.x, out.pose.position.y, out.pose.position.z = x, y, msg.pose.position.z
+        return out
+
+    @staticmethod
+    def _pose_at_height(msg: PoseStamped, z: float) -> PoseStamped:
+        """msg at height z."""
+        out = PoseStamped()
+        out.header = msg.header
+        out.pose.orientation = msg.pose.orientation
+        out.pose.position.x, out.pose.position.y, out.pose.position.z = msg.pose.position.x, msg.pose.position.y, z
         return out
 
     def _on_scan(self, msg: LaserScan) -> None:

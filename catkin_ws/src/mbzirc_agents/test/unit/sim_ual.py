@@ -157,8 +157,9 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
          timeout=120.0, litres=None, track_from=None, progress=0.0):
     """One ExtinguishIndoorFire goal on one tank against ual_sim's world under `profile_name`, seed `seed`:
     a water UAV placed start_distance m in front of indoor fire `holder` (at its height, facing it), its track
-    at the fire as its own GNSS frame puts it (truth + the UAV's bias then; track_from: another robot's id, the
-    track placed with that robot's bias instead, as when one robot found the fire and another waters it).
+    at the fire as its own GNSS frame puts it horizontally (truth + the UAV's bias then), at its true height
+    (track_from: another robot's id, the track placed with that robot's bias instead, as when one robot found
+    the fire and another waters it).
     need: litres the fire needs (None:
     the seed's draw; a large value measures the whole tank). litres: the tank (None: full). progress: the share
     of its need the fire already holds (a top-up of a fire left nearly out by a tank that ran dry).
@@ -192,7 +193,10 @@ def pour(seed, holder='in1_e', need=None, params=None, start_distance=2.5, profi
     agent = start_agent(UavAgent('2', be, {'region_timeout': 5.0, **(params or {})}), be)
     try:
         finder = rid if track_from is None else track_from
-        track = c + sim.uncertainty.gnss_fix(finder) if sim.uncertainty is not None else c
+        err = sim.uncertainty.gnss_fix(finder) if sim.uncertainty is not None else np.zeros(3)
+        # horizontally the finder's GNSS error; its height the finder's true one (the detectors place fires
+        # at the height the finder's altimeter corrects, UavAgent._detectors_pose)
+        track = c + np.array([err[0], err[1], 0.0])
         o = Object(id=7, type=C.TYPE_FIRE, sub_type=C.SUBTYPE_INDOOR, status=C.STATUS_ACTIVE, num_updates=50)
         o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = track
         o.pose.covariance = [0.0] * 36

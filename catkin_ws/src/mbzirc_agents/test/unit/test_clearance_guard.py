@@ -157,3 +157,26 @@ def test_the_low_facade_fire_a4_is_put_out_off_the_ground(guard):
     finally:
         sc.stop = True
         stop_agent(agent, ual, be)
+
+
+def _detectors_z(be):
+    (topic,) = [t for t in be.pubs if t.endswith('agent/pose')]
+    return be.pubs[topic][-1].pose.position.z
+
+
+def test_the_detectors_pose_is_at_the_true_height_by_the_altimeter():
+    """agent/pose (what the fire detector places fires with) reads the true height, whatever the UAV's
+    vertical GNSS error, while the altimeter gives it; without a reading it is the GNSS height. Realistic
+    seed 101 at rtf 4: in1_w's track carried the finding UAV's -0.29 m, a top-up by another UAV flew 0.36 m
+    under the first pour and put nothing in, the fire left at 99.4 %."""
+    be, agent, ual = fly()
+    try:
+        ual.gnss_bias = np.array([0.0, 0.0, 0.6])
+        be.clock.sleep(2.0)
+        assert agent.position()[2] == pytest.approx(ual.pos[2] + 0.6, abs=0.02)    # the UAL's: GNSS
+        assert _detectors_z(be) == pytest.approx(ual.pos[2], abs=0.05)             # the detectors': true
+        ual.altimeter = False                                   # silent: stale, no estimate
+        be.clock.sleep(3.0)
+        assert _detectors_z(be) == pytest.approx(ual.pos[2] + 0.6, abs=0.02)
+    finally:
+        stop_agent(agent, ual, be)

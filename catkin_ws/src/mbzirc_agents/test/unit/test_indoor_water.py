@@ -1158,3 +1158,34 @@ def test_seed_109_a_fire_the_detector_loses_once_aimed_at_is_watered_on_the_raw_
     assert 'hot before aiming' not in s.result.message, s.result.message
     assert cam.received >= cam.need, f'{cam.received:.2f} s of water in of {cam.need:.2f}: {s.result.message}'
     assert s.status == 'succeeded' and s.result.extinguished, s.result.message
+
+
+class PumpHeights:
+    """The UAV's true heights while its pump runs."""
+
+    def __init__(self, sc):
+        self.sc, self.heights, self.stop = sc, [], False
+        sc.be.clock.start_thread(self._loop, name='pump heights')
+
+    def _loop(self):
+        while not self.stop:
+            if self.sc.ual.pump:
+                self.heights.append(float(self.sc.ual.pos[2]))
+            self.sc.be.clock.sleep(0.05)
+
+
+@pytest.mark.parametrize('bias_z', [0.45, -0.4])
+def test_realistic_101_a_blind_top_up_waters_at_the_tracks_true_height_whatever_its_gnss_error(scenes, bias_z):
+    """A track's height is a true one (the detectors place fires at the finding UAV's true height): a UAV
+    topping up a fire that reads cold (nothing to steer on) flies to it at its own true height, not at the
+    GNSS one (realistic seed 101 at rtf 4: the top-up's jet 0.36 m under the pour that had put 1.1 L in,
+    none of its water in, the fire left at 99.4 %)."""
+    sc = scenes(hot_until=0.0)
+    sc.ual.gnss_bias = np.array([0.0, 0.0, bias_z])
+    sc.be.clock.sleep(2.0)                                   # the altimeter's estimate of the error settles
+    pump = PumpHeights(sc)
+    sc.threads = (pump,)
+    s = sc.extinguish(timeout=60)
+    assert 'not seen hot from the watering pose' in s.result.message, s.result.message
+    assert pump.heights, 'no water pumped'
+    assert abs(float(np.median(pump.heights)) - FIRE[2]) < 0.12, (bias_z, np.median(pump.heights))

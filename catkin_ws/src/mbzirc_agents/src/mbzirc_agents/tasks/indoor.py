@@ -490,10 +490,11 @@ class ExtinguishIndoorFire(AgentTask):
             looks += [(0.0, LOOK_CLIMB), (0.0, -LOOK_CLIMB)]
         best = self._looks(yaw, z0, looks, 'fire not in sight', warm_too=True)
         if best is None and a.ROBOT_TYPE == 'uav':
-            # farther up and down: the track's height is the GNSS height of the robot that saw the fire, the
-            # watering height this one's; their vertical errors differ by up to a metre (explore + GNSS-denied
-            # seed 109 on 61430b6: in1_w's track 0.78 m above the fire, a top-up's five looks found nothing
-            # and its 1.34 L went onto the wall, the fire left at 93 %)
+            # farther up and down: the track's height and this UAV's are true heights by two altimeters'
+            # estimates, and a robot without a fresh estimate places and flies GNSS heights, whose vertical
+            # errors differ by up to a metre (explore + GNSS-denied seed 109 on 61430b6: in1_w's track 0.78 m
+            # above the fire, a top-up's five looks found nothing and its 1.34 L went onto the wall, the fire
+            # left at 93 %)
             best = self._looks(yaw, z0, [(0.0, 2 * LOOK_CLIMB), (0.0, -2 * LOOK_CLIMB)], 'fire not in sight',
                                warm_too=True)
         if best is None:
@@ -628,6 +629,8 @@ class ExtinguishIndoorFire(AgentTask):
         if a.water_empty():
             raise TaskError('tank empty')
         fire = np.array(fire_position(a, ud.fire_id))
+        if a.ROBOT_TYPE == 'uav':      # a track's height is a true one (UavAgent._detectors_pose): flown as such
+            fire[2] = a.at_true_height(fire)[2]
         self.fire_xy = fire[:2].copy()
         self.sensed.clear()                              # a previous run's detections aim nothing
         self.contrast.clear()                            # nor its locked fire
