@@ -62,6 +62,21 @@ def test_thermal_fire_cools_with_water_and_fades_with_distance(world):
     assert hot > half > out and out < 46.0
 
 
+def test_a_fire_is_not_seen_through_the_back_of_its_wall(world):
+    """Realistic seed 107 at rtf 4: in1_e (on the east face of the 0.2 m interior wall) was seen from the
+    west room within 1 m of it, through the wall, and watered from there three times; from behind its wall a
+    holder shows nothing, from in front at the same distance its fire."""
+    fires = FireSet(world, seed=1)
+    cam = ThermalCamera(FORWARD, noise_std=0.0)
+    i = next(i for i, f in enumerate(fires.fires) if f.holder.id == 'in1_e')
+    fires.fires[i].active = True
+    h = fires.fires[i].holder
+    front, front_yaw = facing(h, 0.8, C.THERMAL_OFFSET_FORWARD)
+    assert cam.render(world, fires, front, front_yaw).max() > 100.0
+    behind = h.position - h.normal * (0.2 + 0.7)          # 0.7 m from the wall's back face, facing it
+    assert cam.render(world, fires, behind, front_yaw + math.pi).max() < 46.0
+
+
 def test_downward_thermal_sees_ground_fire_and_blanket(world):
     fires = FireSet(world, seed=1)
     cam = ThermalCamera(DOWNWARD, noise_std=0.0)
