@@ -632,7 +632,8 @@ class OutlineRefiner:
 
 class CorrectionSmoother:
     """The correction actually applied: it follows the fitted one at a bounded rate, measured at the
-    robot (so a newly observed direction does not make the pose jump)."""
+    robot (so a newly observed direction does not make the pose a robot flies on jump), or at once while no
+    one flies on it (`step(..., at_once=True)`: on GNSS the robots fly on the UAL's pose)."""
 
     def __init__(self, rate: float = 1.0, yaw_rate: float = 0.1):
         self.rate, self.yaw_rate = rate, yaw_rate       # m/s, rad/s
@@ -642,10 +643,14 @@ class CorrectionSmoother:
     def reset(self) -> None:
         self.applied, self.t = IDENTITY, None
 
-    def step(self, t: float, target: Anchor, at: tuple) -> Anchor:
-        """Move the applied correction towards target, measured at `at` (x, y arena), and return it."""
+    def step(self, t: float, target: Anchor, at: tuple, at_once: bool = False) -> Anchor:
+        """Move the applied correction towards target, measured at `at` (x, y arena), and return it;
+        at_once: the whole way."""
         dt = 0.0 if self.t is None else max(t - self.t, 0.0)
         self.t = t
+        if at_once:
+            self.applied = target
+            return target
         a = self.applied
         ax, ay, _ = a.apply(at[0], at[1], 0.0)
         bx, by, _ = target.apply(at[0], at[1], 0.0)

@@ -240,6 +240,20 @@ def test_bounds_reject_a_large_correction():
     assert any("rejected" in e for e in refiner.pop_events())
 
 
+def test_smoother_applies_at_once_when_asked_then_limits_the_rate_again():
+    """On GNSS (nobody flies on the pose) the fitted correction applies at once; afterwards the rate limit
+    holds from there."""
+    sm = CorrectionSmoother(rate=0.5, yaw_rate=0.1)
+    target = Anchor(0.05, 1.0, 0.0)
+    at = (10.0, 5.0)
+    sm.step(0.0, IDENTITY, at)
+    assert sm.step(0.2, target, at, at_once=True) == target
+    a = sm.step(0.4, IDENTITY, at)
+    moved = a.apply(*at, 0.0)
+    want = target.apply(*at, 0.0)
+    assert math.hypot(moved[0] - want[0], moved[1] - want[1]) == pytest.approx(0.1, abs=1e-9)
+
+
 def test_smoother_limits_the_rate_at_the_robot():
     sm = CorrectionSmoother(rate=0.5, yaw_rate=0.1)
     target = Anchor(0.05, 1.0, 0.0)
