@@ -207,7 +207,7 @@ class RobotAgent(Agent):
             frame_jump = src.take_frame_jump()
             x, y = src.to_arena(p.x, p.y)
             self.pose = np.array([x, y, p.z, yaw])
-            self.pose_msg = msg if (x, y) == (p.x, p.y) else self._arena_pose_msg(msg, x, y)
+            self.pose_msg = msg if (x, y) == (p.x, p.y) else self._pose_msg_at(msg, x, y, p.z)
             if self.pose_history and stamp < self.pose_history[-1][0]:
                 self.pose_history.clear()           # time went back (bag loop, sim restart)
             self.pose_history.append((stamp, self.pose))
@@ -236,21 +236,13 @@ class RobotAgent(Agent):
         return msg
 
     @staticmethod
-    def _arena_pose_msg(msg: PoseStamped, x: float, y: float) -> PoseStamped:
-        """msg with the arena (x, y) of the pose source (the data_feed's pose)."""
+    def _pose_msg_at(msg: PoseStamped, x: float, y: float, z: float) -> PoseStamped:
+        """msg (stamp, frame, orientation) at position (x, y, z): the arena position of the pose source (the
+        data_feed's pose), or a true height (the detectors')."""
         out = PoseStamped()
         out.header = msg.header
         out.pose.orientation = msg.pose.orientation
-        out.pose.position.x, out.pose.position.y, out.pose.position.z = x, y, msg.pose.position.z
-        return out
-
-    @staticmethod
-    def _pose_at_height(msg: PoseStamped, z: float) -> PoseStamped:
-        """msg at height z."""
-        out = PoseStamped()
-        out.header = msg.header
-        out.pose.orientation = msg.pose.orientation
-        out.pose.position.x, out.pose.position.y, out.pose.position.z = msg.pose.position.x, msg.pose.position.y, z
+        out.pose.position.x, out.pose.position.y, out.pose.position.z = x, y, z
         return out
 
     def _on_scan(self, msg: LaserScan) -> None:

@@ -81,7 +81,7 @@ class UavAgent(RobotAgent):
         rtf 4: in1_w left at 99.4 %)."""
         keeper = getattr(self, 'clearance', None)      # the pose callback may run before __init__ ends
         z = None if keeper is None else keeper.true_height_of(msg.pose.position.z)
-        return msg if z is None else self._pose_at_height(msg, z)
+        return msg if z is None else self._pose_msg_at(msg, msg.pose.position.x, msg.pose.position.y, z)
 
     def at_true_height(self, target: Sequence[float]) -> tuple:
         """target (x, y, z true: the arena model's) as the UAL flies it: z + the vertical GNSS error its
