@@ -40,8 +40,6 @@ from .anchor import Anchor, compose
 IDENTITY = Anchor(0.0, 0.0, 0.0)
 COVERAGE_BIN = 0.25          # m: bins along a wall line when measuring how the returns spread along it
 CORNER_TOUCH = 0.05          # m: a face's end this near another building's face is no corner of the outline
-END_ABOVE_ROOF = 0.5         # m over a lower building's roof where a corner above it counts (parapets, the
-                             # laser's tilt)
 SURFACE_BIN = 0.1            # m: bands parallel to a wall when looking for its outermost surface
 SURFACE_DEPTH = 0.6          # m: returns this far in from the outermost surface may belong to it (a wall
                              # tilted by the anchor's yaw error spreads over a band this deep)
@@ -63,7 +61,6 @@ class Face:
     offset: float
     top: float                   # m: the wall stands up to its building's roof
     end: bool = False            # a corner's virtual face: across a wall's line through its end (`corner_ends`)
-    bottom: float = 0.0          # m: an end is a corner of the outline only above this (a lower building's roof)
 
     @property
     def direction(self) -> float:
@@ -89,17 +86,13 @@ def outline_faces(footprints: Sequence[Sequence[float]]) -> list:
 
 def corner_ends(faces: Sequence[Face]) -> dict:
     """{(face index, 0 or 1): virtual Face} for the ends (a, b) of every face that are corners of the whole
-    outline: where no face of another building touches them, or above the roofs of those that do (`bottom`:
-    where the extension meets the tower, facade A's line goes on along the extension's up to its roof, and
-    above it the tower's corner stands free). The virtual face lies across the wall's line through the end,
-    its normal along the wall, outwards past the end: an end seen is an offset of that face."""
+    outline: no face of another building touches them (where the extension meets the tower, facade A's line
+    goes on along the extension's: no corner there). The virtual face lies across the wall's line through
+    the end, its normal along the wall, outwards past the end: an end seen is an offset of that face."""
     out = {}
     for k, f in enumerate(faces):
         for i, (e, other) in enumerate(((f.a, f.b), (f.b, f.a))):
-            touching = [g.top for g in faces
-                        if g.building != f.building and dist_point_segment(e, g.a, g.b) <= CORNER_TOUCH]
-            bottom = max(touching, default=0.0)
-            if bottom >= f.top:
+            if any(g.building != f.building and dist_point_segment(e, g.a, g.b) <= CORNER_TOUCH for g in faces):
                 continue
             ux, uy = e[0] - other[0], e[1] - other[1]
             n = math.hypot(ux, uy)
@@ -107,7 +100,7 @@ def corner_ends(faces: Sequence[Face]) -> dict:
                 continue
             ux, uy = ux / n, uy / n
             out[(k, i)] = Face(f.building, f"{f.name} {'a' if i == 0 else 'b'} end", e, e, (ux, uy),
-                               ux * e[0] + uy * e[1], f.top, end=True, bottom=bottom)
+                               ux * e[0] + uy * e[1], f.top, end=True)
     return out
 
 
@@ -286,7 +279,7 @@ class OutlineRefiner:
             obs, inliers = seen
             made = [((k, inner), obs)]
             if not inner:
-                made += [((e.face, False), e) for e in self._observe_ends(t, k, inliers, pts, in_map, refined, z,
+                made += [((e.face, False), e) for e in self._observe_ends(t, k, inliers, pts, in_map, refined,
                                                                           robot)]
             for key, o in made:
                 o = o if gnss_valid else replace(o, gnss=False)
@@ -389,7 +382,7 @@ class OutlineRefiner:
                                 rms / math.sqrt(len(q)), rms * math.sqrt(12.0 / len(q)) / max(span, 1e-3)), idx)
 
     def _observe_ends(self, t: float, k: int, inliers: np.ndarray, pts: np.ndarray, in_map: np.ndarray,
-                      refined: Anchor, z: float, robot: tuple) -> list:
+                      refined: Anchor, robot: tuple) -> list:
         """The corner ends of outer face k seen in this scan (arena frame pts, map frame in_map; `inliers`:
         the indices of its line's returns), as observations of their virtual faces. Rules: an end is where
         the line's returns stop within the end's gate of where the anchor predicts it, with returns in
@@ -409,8 +402,8 @@ class OutlineRefiner:
         s_line, d_line = along[inliers], float(np.median(d[inliers]))
         for i in (0, 1):
             vk = self.ends.get((k, i))
-            if vk is None or (self.faces[vk].bottom > 0.0 and z < self.faces[vk].bottom + END_ABOVE_ROOF):
-                continue                                    # no corner here, or not at the laser's height
+            if vk is None:
+                continue
             sign = 1.0 if i == 1 else -1.0                  # along the wall, outwards past this end
             s = sign * s_line                               # so that the end is the largest
             s_end_pred = sign * (f.length if i == 1 else 0.0)
