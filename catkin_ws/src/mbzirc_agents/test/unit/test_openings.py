@@ -156,3 +156,17 @@ def test_a_side_wall_beside_the_robot_is_not_the_wall_ahead():
     boxes = wall(1.5, with_gaps([(-1.2, 0.8)])) + [(-3.0, 0.8, 1.5, 1.0)]
     o = find(scan(boxes, noise=0.01, nan_rate=0.01, inf_rate=0.02, seed=2))
     assert o is not None and abs(o.lateral + 0.2) < 0.05 and abs(o.distance - 1.5) < 0.05
+
+
+def test_a_corridor_is_no_doorway_across_it():
+    """In a corridor 2.7 m wide (side walls 1.35 m either side, along the heading, its end 2.5 m ahead): the
+    side walls' returns at the same short x are no wall across it with a 2.7 m doorway 0.4 m ahead
+    (c3_floor_plan_b, realistic seed 101 at rtf 4: a UAV centred 16 s on that doorway and hit the end wall).
+    The end wall is the wall ahead, and it has no opening."""
+    boxes = [(-3.0, 1.35, 3.0, 1.55), (-3.0, -1.55, 3.0, -1.35), (2.5, -1.55, 2.7, 1.55)]
+    r = scan(boxes, noise=0.01, nan_rate=0.01, inf_rate=0.02, seed=5)
+    assert find_openings(r, ANGLE_MIN, INC, 2.0, tolerance=0.9) == []
+    # with a doorway 2 m wide in the end wall: that one is found, at the end wall's distance
+    boxes = boxes[:2] + [(2.5, -1.55, 2.7, -1.0), (2.5, 1.0, 2.7, 1.55)]
+    o = find(scan(boxes, noise=0.01, seed=6))
+    assert o is not None and abs(o.distance - 2.5) < 0.1 and abs(o.lateral) < 0.1, o
