@@ -74,10 +74,7 @@ class ClearanceKeeper:
     def true_height(self) -> Optional[float]:
         """The true height (arena z of base_link) by the guard (clearance.py `true_z`: while a hold is tracked,
         by the vertical velocity since its start; else the GNSS height less a fresh e); None without either."""
-        a = self.agent
-        z = float(a.position(wait=0.0)[2])
-        with self.lock:
-            return self.guard.true_z(z, a.backend.now())
+        return self.true_height_of(float(self.agent.position(wait=0.0)[2]))
 
     def true_height_of(self, gnss_z: float) -> Optional[float]:
         """true_height() of a reported GNSS height gnss_z (a pose message's), None without an estimate."""

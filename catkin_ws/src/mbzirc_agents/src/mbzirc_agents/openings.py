@@ -86,10 +86,12 @@ def _wall_line(x: np.ndarray, y: np.ndarray, band: float, min_beams: int, max_sl
             d, k = _line_fit(x, y, inl)
         if inl is None:
             continue
-        inl = _along_the_line(x, y, inl)
-        if inl.sum() < min_beams:
-            continue
-        d, k = _line_fit(x, y, inl)
+        along = _along_the_line(x, y, inl)
+        if along.sum() < inl.sum():                  # fitted again only without what ran across it
+            inl = along
+            if inl.sum() < min_beams:
+                continue
+            d, k = _line_fit(x, y, inl)
         if abs(k) <= max_slope and np.ptp(y[inl]) >= min_span:
             return float(d), float(k)
     return None
