@@ -282,3 +282,27 @@ def test_realistic_108_a_waypoint_at_the_doorways_edge_is_passed_by_and_the_door
     assert ual.pos[0] < 17.7 - UGV_R, f'not through the doorway: {ual.pos}'
     assert closest.least > UGV_R + 0.1, f'{closest.least:.2f} m off the wall'
     assert any('at a wall by the laser' in m for m in be.warns), be.warns
+
+
+def test_floor_plan_b_a_uav_held_near_a_wall_by_the_guard_backs_off_it(uav):
+    """c3_floor_plan_b seed 101: leaving floor 1's south strip (2.7 m deep), UAV 2 was sent to a way-out
+    point 0.4 m from the strip's north wall (unknown to the central unit); the guard held the leg 0.58 m from
+    the wall, the UAV coasted on to 0.38 m and, turning there to explore, hit it. A leg the guard stops
+    leaves the UAV off the walls its laser sees (~min_wall_clearance), as a leg that ends does."""
+    agent, ual, be, scene = uav
+    ual.pos = np.array([21.6, 8.1, 6.5])
+    ual.yaw = -math.pi / 2
+    be.clock.sleep(3.0)
+    be.handlers['thermal_detection/fire_detected'] = lambda r: CheckFireResponse(fire_detected=False)
+    scene.shift = (0.0, 0.0)
+    strip_wall = (17.9, 9.6, 24.0, 9.8)
+    scene.boxes = lambda z: wall_boxes(z) + [strip_wall]
+    closest = Closest(be, ual, [strip_wall])
+    s = be.servers['search_indoor_action']
+    s.send(SearchIndoorGoal(floor=1, path=[goal_pose(18.0, 9.2, 6.5, -math.pi / 2)]))
+    assert s.wait(200) == 'aborted', s.result.message
+    assert 'blocks the leg' in s.result.message, s.result.message
+    be.clock.sleep(3.0)
+    closest.stop = True
+    assert closest.least > UAV_R + 0.2, f'{closest.least:.2f} m off the wall'
+    assert strip_wall[1] - ual.pos[1] >= agent.p.min_wall_clearance - 0.15, f'held {strip_wall[1] - ual.pos[1]:.2f} m off'

@@ -50,6 +50,9 @@ class Bookkeeping:
         # the way to a fire is through that room (IndoorPhase.room_to_reach), and out through that window
         self.entered: dict[str, tuple[int, Any]] = {}
         self.fire_rooms: dict[int, tuple[int, Any]] = {}
+        # where each agent's last entry ended (the enter_building it succeeded, the x, y it then reported): a
+        # place inside it flew to, where its way out starts when the interior is not known (transit.exit_path)
+        self.way_in_end: dict[str, tuple[Command, tuple[float, float]]] = {}
 
     def on_sent(self, cmd: Command) -> None:
         """The node sent `cmd`: the agent is busy with it until `record`."""
@@ -132,6 +135,17 @@ class Bookkeeping:
         """A command that could not be sent (no action server yet): not in flight, not a failure."""
         if self.in_flight.get(cmd.agent_id) is cmd:
             del self.in_flight[cmd.agent_id]
+
+    def note_way_in(self, agent_id: str, xy: tuple[float, float]) -> None:
+        """The agent is at xy now: the end of its way in when its last task done was an entry not noted yet."""
+        last = self.last_done.get(agent_id)
+        if last is not None and last.task == C.ENTER_BUILDING and self.way_in_end.get(agent_id, (None,))[0] is not last:
+            self.way_in_end[agent_id] = (last, (float(xy[0]), float(xy[1])))
+
+    def way_in_end_of(self, agent_id: str, room: tuple[int, Any]) -> Optional[tuple[float, float]]:
+        """Where the agent's last entry, into room (floor, index), ended; None when its last entry was another."""
+        noted = self.way_in_end.get(agent_id)
+        return noted[1] if noted is not None and noted[0].target == room else None
 
     def forget_agent(self, agent_id: str) -> None:
         """An agent went silent: its goal and its last task are forgotten."""

@@ -136,6 +136,7 @@ class Strategy:
             a = world.agents[agent_id]
             if not a.alive(world.now, self.p.agent_timeout) or agent_id in self.book.in_flight or not a.is_idle:
                 continue
+            self.book.note_way_in(agent_id, a.position[:2])
             if self.book.waiting_for_reported_fires(agent_id, world) or self.book.broken(agent_id):
                 continue
             if self.book.not_ready(a):

@@ -106,16 +106,23 @@ class Router:
         if not rooms:
             return []
         room = min(rooms, key=lambda r: math.dist(r.inner, a.position))
+        start = room.exit_start
         entered = self.book.entered.get(a.agent_id)
         if self.p.layout.explored and entered is not None and entered[0] == G.floor_of(a.z) \
                 and isinstance(entered[1], int) and entered[1] < len(rooms):
             room = rooms[entered[1]]    # no walls known: out through the window it came in (in its sight)
+            start = room.exit_start
+            way_in = self.book.way_in_end_of(a.agent_id, entered)
+            if way_in is not None:
+                # the way out starts where the way in ended, a place it flew to: EXIT_DEPTH inside the window
+                # is unknown space (c3_floor_plan_b seed 101: in floor 1's 2.7 m deep south strip it was 0.4 m
+                # from an interior wall; UAV 2, sent there, hit the wall)
+                start = (*way_in, start[2])
         e = room.entry
         back = e[3] + math.pi  # face out while leaving
         # One waypoint per goal: the agents' search_indoor stops at the first waypoint where it knows a
         # fire of the floor, so a longer path could end inside. First to the point inside the window
         # where the way out starts, then straight out through it.
-        start = room.exit_start
         # horizontally only: indoors the agents fly heights by the altimeter, so the reported (GNSS) height
         # stays off the commanded one by the vertical GNSS error, and a 3D test never saw the UAV arrive
         if math.dist(a.position[:2], start[:2]) > 0.6:

@@ -157,3 +157,33 @@ def test_a_window_every_agent_failed_to_enter_is_given_up_by_all():
     third = uav(*rooms[0].entry[:3])
     third.agent_id = "1"
     assert not s.indoor.room_ok(third, 1, 0)
+
+
+def test_floor_plan_b_the_way_out_starts_where_the_way_in_ended():
+    """c3_floor_plan_b seed 101: UAV 2 left floor 1's south strip (2.7 m deep, behind facade B's window) via
+    the point EXIT_DEPTH inside the window, 0.4 m from the strip's interior wall that nobody knows of, and hit
+    it. With no interior known, the way out starts where the UAV's entry ended (its x, y when the central unit
+    saw it idle after enter_building): a place it has flown to. Another room entered later has its own."""
+    s = explored()
+    rooms = s.p.layout.rooms[1]
+    south = min(range(len(rooms)), key=lambda i: rooms[i].inner[1])             # facade B: south
+    enter = s.indoor._to_room(uav(*rooms[south].entry[:3]), 1, south, rooms[south], False, "test")
+    s.on_sent(enter); s.on_result(enter, True)
+    end = (rooms[south].inner[0] + 0.4, rooms[south].inner[1] - 0.3, rooms[south].inner[2] - 0.2)
+    s.decide(WorldView(1.0, {"2": uav(*end)}, {}))
+    s.book.in_flight.clear()
+    out = s.router.exit_path(uav(21.6, 8.1, 6.5, water=0.0))
+    assert out[0][:2] == pytest.approx(end[:2]) and out[0][2] == rooms[south].exit_start[2], out
+    assert math.dist(out[0][:2], rooms[south].exit_start[:2]) > 0.5
+    # at it, straight out through the window
+    assert s.router.exit_path(uav(*end, water=0.0))[0][:3] == rooms[south].entry[:3]
+    # the UAV at the entry end later (say, searching) does not move the way in's end
+    s.decide(WorldView(2.0, {"2": uav(21.6, 8.1, 6.5)}, {}))
+    s.book.in_flight.clear()
+    assert s.router.exit_path(uav(21.6, 8.1, 6.5, water=0.0))[0][:2] == pytest.approx(end[:2])
+    # entered through another window: the way out of that room is its own
+    other = next(i for i in range(len(rooms)) if i != south)
+    enter = s.indoor._to_room(uav(*rooms[other].entry[:3]), 1, other, rooms[other], False, "test")
+    s.on_sent(enter); s.on_result(enter, True)
+    out = s.router.exit_path(uav(*rooms[other].inner, water=0.0))
+    assert out[0][:3] == pytest.approx(rooms[other].exit_start)

@@ -153,7 +153,7 @@ class Exploration:
     def look_around(self) -> list:
         """Turn through the headings on the spot; thermal look and laser scan at each. Fire ids found."""
         a, p = self.agent, self.agent.p
-        here = a.position()
+        here = self.task._off_the_walls(a.position())      # a UAV turns ~min_wall_clearance off the walls
         self.looked.append(tuple(here[:2]))
         yaws = self.headings(here)
         for k, yaw in enumerate(yaws):

@@ -188,7 +188,8 @@ class GoTo(AgentTask):
     GNSS error (UavAgent.at_true_height), not a GNSS one (a sensed object's, a pose's).
 
     A straight leg (indoors, or asked for) stops and fails when the laser sees a return ahead on it
-    (leg_guard.py): indoors the waypoints come with the GNSS error, a metre or more.
+    (leg_guard.py): indoors the waypoints come with the GNSS error, a metre or more. Inside, a leg that ends
+    or is stopped leaves the UAV ~min_wall_clearance off the walls its laser sees (`_off_the_walls`).
     """
     INPUT_KEYS = ['waypoint']
 
@@ -232,7 +233,12 @@ class GoTo(AgentTask):
                         self._along_first(leg, what)
                     self._in_off_the_facades(what)
                     self._height_first(leg[2], what)
-                self.guard.move(leg, leg_yaw, what)
+                try:
+                    self.guard.move(leg, leg_yaw, what)
+                except TaskError:
+                    if start_in:     # held short: off the walls too, as at a leg's end, then the failure
+                        self._off_the_walls(f'{what} (held)')
+                    raise
                 if start_in and target_in:
                     self._off_the_walls(what)
             else:
