@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs one simulated Challenge 3 trial (c3_sim.launch) headless and shows its progress in the terminal:
 #   tools/run_mission.sh SEED=1 UAVS=3 RTF=4 RECORD=0 SUMMARY=path/summary.json [OUT=dir] [UGV=true]
+#                        [RECORD_SLAM=0|1]   (slam.bag: the robots' scans, SLAM and GNSS, for indoor_localization offline)
 #                        [GCS=1] [GCS_PORT=8088]   (GCS=0: no web ground station)
 #                        [UNCERTAINTY=ideal|realistic]   (the trial's uncertainty, ual_sim README)
 #                        [GNSS_DENIED_INDOORS=|0|1]   (no GNSS inside buildings, ual_sim README "No GNSS indoors";
@@ -15,12 +16,12 @@
 # port so it never clashes with another roscore on this machine.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-SEED=1; UAVS=3; RTF=4; RECORD=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
+SEED=1; UAVS=3; RTF=4; RECORD=0; RECORD_SLAM=0; SUMMARY=""; OUT=""; UGV=true; DURATION=1200; QUIET=0; GCS=1; GCS_PORT=8088; UNCERTAINTY=ideal
 INDOOR_SLAM=""; GNSS_DENIED_INDOORS=""; WORLD=""; INDOOR_SEARCH=explore
 SMACH_DEBUG="${SMACH_DEBUG:-0}"  # 1: the agents accept container_init and the viewer's debugger (make mission SMACH_DEBUG=1)
 for kv in "$@"; do
   case "$kv" in
-    SEED=*|UAVS=*|RTF=*|RECORD=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*|INDOOR_SLAM=*|GNSS_DENIED_INDOORS=*|WORLD=*|INDOOR_SEARCH=*) declare "$kv" ;;
+    SEED=*|UAVS=*|RTF=*|RECORD=*|RECORD_SLAM=*|SUMMARY=*|OUT=*|UGV=*|DURATION=*|QUIET=*|SMACH_DEBUG=*|GCS=*|GCS_PORT=*|UNCERTAINTY=*|INDOOR_SLAM=*|GNSS_DENIED_INDOORS=*|WORLD=*|INDOOR_SEARCH=*) declare "$kv" ;;
     *) echo "run_mission.sh: unknown argument '$kv'" >&2; exit 2 ;;
   esac
 done
@@ -40,6 +41,7 @@ slam=""; [ "$INDOOR_SLAM" = 1 ] && slam=true; [ "$INDOOR_SLAM" = 0 ] && slam=fal
 [ "$INDOOR_SLAM" = 0 ] && { [ "$denied" = true ] || { [ -z "$denied" ] && [ "$UNCERTAINTY" != ideal ]; }; } \
   && echo "run_mission.sh: warning: GNSS denied indoors with INDOOR_SLAM=0: robots entering a building will hold there (no trusted pose)" >&2
 record=false; [ "$RECORD" = 1 ] || [ "$RECORD" = true ] && record=true
+record_slam=false; [ "$RECORD_SLAM" = 1 ] || [ "$RECORD_SLAM" = true ] && record_slam=true
 smach_debug=false; [ "$SMACH_DEBUG" = 1 ] || [ "$SMACH_DEBUG" = true ] && smach_debug=true
 # shellcheck disable=SC1091
 set +u; source "$ROOT/env.sh"; set -u
@@ -54,7 +56,7 @@ LOG="$OUT/launch.log"
 echo "mission: seed $SEED, $UAVS UAVs, UGV $UGV, rtf $RTF, uncertainty $UNCERTAINTY, indoor SLAM ${slam:-where GNSS is denied}, GNSS denied indoors ${denied:-as the profile}, indoor search $INDOOR_SEARCH, world ${WORLD:-default}, record $record -> $OUT (master port $PORT)"
 
 setsid roslaunch -p "$PORT" mbzirc_launchers c3_sim.launch uavs:="$UAVS" ugv:="$UGV" seed:="$SEED" \
-  rtf:="$RTF" headless:=true record:="$record" output_dir:="$OUT" summary_path:="$SUMMARY" \
+  rtf:="$RTF" headless:=true record:="$record" record_slam:="$record_slam" output_dir:="$OUT" summary_path:="$SUMMARY" \
   duration:="$DURATION" smach_debug:="$smach_debug" uncertainty:="$UNCERTAINTY" \
   indoor_slam:="$slam" gnss_denied_indoors:="$denied" \
   world:="$WORLD" indoor_search:="$INDOOR_SEARCH" > "$LOG" 2>&1 &

@@ -306,3 +306,36 @@ def test_floor_plan_b_a_uav_held_near_a_wall_by_the_guard_backs_off_it(uav):
     closest.stop = True
     assert closest.least > UAV_R + 0.2, f'{closest.least:.2f} m off the wall'
     assert strip_wall[1] - ual.pos[1] >= agent.p.min_wall_clearance - 0.15, f'held {strip_wall[1] - ual.pos[1]:.2f} m off'
+
+
+def test_floor_plan_b_the_ugv_reaches_a_fire_in_the_next_room_through_its_doorway(ugv):
+    """c3_floor_plan_b seed 101: back in the south strip after exploring, the UGV was sent to water a fire on
+    the north-west room's east wall (x 18.0, y 12.0); its straight approach met the strip's wall (y 9.6-9.8,
+    doorway x 13-15), the guard held it three times and the fire was given up. The approach passes a doorway
+    across it, as a search leg does."""
+    from mbzirc_comm_objs.msg import ExtinguishIndoorFireGoal, Object, ObjectList
+    from mbzirc_agents import constants as AC
+    agent, ual, be, scene = ugv
+    ual.pos = np.array([14.5, 8.3, 0.0])
+    ual.yaw = 0.0
+    be.clock.sleep(3.0)
+    scene.shift = (0.0, 0.0)
+    inner = [(11.6, 9.6, 13.0, 9.8), (15.0, 9.6, 24.0, 9.8), (18.0, 9.8, 18.2, 16.0), (18.0, 18.0, 18.2, 19.3)]
+    scene.boxes = wall_boxes(0.9) + inner
+    closest = Closest(be, ual, inner)
+    o = Object(id=17, type=AC.TYPE_FIRE, sub_type=AC.SUBTYPE_INDOOR, status=AC.STATUS_ACTIVE, num_updates=50)
+    o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z = 18.0, 12.0, 1.5
+    o.pose.covariance = [0.0] * 36
+    o.pose.covariance[0] = o.pose.covariance[7] = o.pose.covariance[14] = 0.2 ** 2
+    be.subs['/estimated_objects'](ObjectList(objects=[o]))
+    be.clock.sleep(0.5)
+    reached = []
+    be.clock.start_thread(lambda: [reached.append(ual.pos[1] > 10.2) or be.clock.sleep(0.1) for _ in range(3000)],
+                          name='reached')
+    s = be.servers['extinguish_indoor_fire_action']
+    s.send(ExtinguishIndoorFireGoal(fire_id=17))
+    s.wait(300)
+    closest.stop = True
+    assert 'blocks the leg' not in (s.result.message if s.result else s.text), s.result.message
+    assert any(reached), f'never in the north-west room: {ual.pos}'
+    assert closest.least > UGV_R + 0.1, f'{closest.least:.2f} m off the wall'

@@ -228,7 +228,8 @@ class ExtinguishIndoorFire(AgentTask):
     spot is straight ahead, and pump until cold.
 
     Walls (wall_clearance.py, ~wall_clearance): before the approach the robot backs off any wall nearer than
-    ~min_wall_clearance, the approach stops at ~indoor_fire_distance from the wall its laser sees ahead, and
+    ~min_wall_clearance, a wall across the approach with a doorway (the fire in the next room) is passed
+    through the doorway by the laser (passage.LaserPassage.doorway; not with ~explore_in_sight), the approach stops at ~indoor_fire_distance from the wall its laser sees ahead, and
     while the robot checks and pumps it backs off any wall nearer than ~min_wall_clearance. Why: the watering pose is placed on the fire's GNSS-frame estimate and held on the
     robot's own drifting GNSS fix (realistic seeds 104, 106: a UAV holding its watering pose on floor 2 hit
     the interior wall the fire is on).
@@ -252,6 +253,7 @@ class ExtinguishIndoorFire(AgentTask):
         super().__init__(name, agent, **args)
         self.sensed = SensedObjects(self)
         self.walls = LegGuard(self)                      # its laser scans (the wall clearance's returns)
+        self.passage = LaserPassage(self)                # a doorway across the approach
         self.aim_z: Optional[float] = None               # the height held to aim (UAV), None: not steered yet
         self.watering_z: Optional[float] = None          # the height the watering pose was reached at
         self.fire_xy: Optional[np.ndarray] = None        # the fire's estimate of this run (x, y)
@@ -642,6 +644,12 @@ class ExtinguishIndoorFire(AgentTask):
         if normal is not None:                           # square to the fire's wall, on the robot's side
             frm = (fire[0] + normal[0], fire[1] + normal[1], frm[2])
         pos, yaw = facing_pose(fire, frm, a.p.indoor_fire_distance)
+        # a wall with a doorway across the way (the fire in the next room): through the doorway first, and the
+        # standoff measured from there (c3_floor_plan_b seed 101: the UGV's straight approach from the south
+        # strip met the strip's wall three times, the guard held it, the fire was given up). Not in-sight
+        # explorers (the UAVs): they water only fires in sight of where they came in, and pass no doorway
+        if not a.p.explore_in_sight:
+            pos = (*self.passage.doorway(pos)[:3],)
         pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         yaw = self._approach(ud.fire_id, fire, pos, yaw)
