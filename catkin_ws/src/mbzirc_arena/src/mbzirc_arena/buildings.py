@@ -123,7 +123,14 @@ def classify_fire(position: Sequence[float], footprints: Sequence[Sequence[float
     _, d = nearest_face(position, under)
     if position[2] < 1.5 and d > GROUND_DISTANCE:
         return M.SUBTYPE_GROUND
-    if facade_holders and in_footprint(position, under) and all(
-            math.dist(position[:3], h[:3]) > FACADE_HOLDER_REACH for h in facade_holders):
+    if facade_holders and no_facade_fire_at(position, footprints, facade_holders):
         return M.SUBTYPE_INDOOR
     return M.SUBTYPE_FACADE
+
+
+def no_facade_fire_at(position: Sequence[float], footprints: Sequence[Sequence[float]],
+                      facade_holders: Sequence[Sequence[float]]) -> bool:
+    """True where no facade fire can be: inside a footprint under its roof, farther than FACADE_HOLDER_REACH
+    from every facade holder."""
+    return in_footprint(position, standing_at(position, footprints, 0.0)) and all(
+        math.dist(position[:3], h[:3]) > FACADE_HOLDER_REACH for h in facade_holders)

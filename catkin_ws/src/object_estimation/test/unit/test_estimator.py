@@ -271,3 +271,22 @@ def test_facade_fire_seen_from_two_storeys_stays_one_track():
     for k in range(20):
         est.add(det((11.9, 14.5, 10.3 + (0.6 if k % 2 else -0.6)), t=k * 0.1))
     assert len(est.objects()) == 1 and est.objects()[0].sub_type == C.SUBTYPE_FACADE
+
+
+def test_an_indoor_fire_behind_an_active_facade_fire_gets_its_own_track():
+    """c3_floor_plan_b seed 101: facade fire D_4's track (24.2, 8.2, 8.25), watered but left active for a top-up,
+    took the detections of indoor fire in1_s (21.5, 9.6, 6.5), 3.5 m away through facade D, inside the
+    chi-square gate with the pose error: the track moved indoors and turned indoor, the UAV sent to it
+    waited for a fire 'watered before' to show hot, and in1_s was never put out. A fire on the outer face and
+    one inside are two fires: a detection of the one kind never goes to a track of the other."""
+    est = ObjectEstimator(min_updates=3, pose_std=0.7)
+    for k in range(30):
+        est.add(det((24.1, 8.2, 8.2), t=k * 0.1, agent='2'))
+    facade = est.objects()[0]
+    assert facade.status == C.STATUS_ACTIVE and facade.sub_type == C.SUBTYPE_FACADE
+    for k in range(30):
+        est.add(det((21.5, 9.5, 6.5), t=50.0 + k * 0.1, agent='3'))
+    assert len(est.objects()) == 2
+    indoor = [t for t in est.objects() if t.id != facade.id][0]
+    assert indoor.sub_type == C.SUBTYPE_INDOOR and indoor.position[0] < 22.0
+    assert est.tracks[facade.id].sub_type == C.SUBTYPE_FACADE and est.tracks[facade.id].position[0] > 23.5
