@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import threading
-from collections import deque
 
 import rospy
 from rospy.numpy_msg import numpy_msg
@@ -20,19 +19,18 @@ from std_srvs.srv import SetBool, Trigger
 from tf2_msgs.msg import TFMessage
 
 from mbzirc_arena.arena import load_arena
-from mbzirc_arena.laser import scan_points
 from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.messages import GLOBAL_FRAME
 from mbzirc_ros_utils.periodic import PeriodicTimer
 
 from .anchor import IndoorPose, Params
 from .mapping_gate import MappingGate
-from .outline import IDENTITY, CorrectionSmoother, OutlineRefiner, RefineParams, outline_faces
+from .outline import RefineParams
+from .refinement import OutlineRefinement
 
 SOURCE_CHECK_PERIOD = 0.2    # s of ROS time: how often a silent SLAM pose is noticed
 SOURCE_KEEPALIVE = 1.0       # s: localization/source is sent on change and at least this often
 THROTTLE = 5.0               # s between repeated warnings
-SCAN_STAMP_MATCH = 1e-3      # s: a scan and the SLAM pose hector_mapping made of it share their stamp
 
 
 def yaw_of(q) -> float:
@@ -50,68 +48,15 @@ def params_from_ros(cls, prefix: str):
                   for k in cls.__dataclass_fields__})
 
 
-class OutlineRefinement:
-    """The anchor's refinement by the building outline seen in the scans (outline.py), for the node: pairs
-    each scan with the SLAM pose of the same stamp, at most every `~scan_period` s, and smooths the
-    correction it applies. Called from the SLAM pose callback only."""
-
-    def __init__(self, arena) -> None:
-        g = rospy.get_param
-        self.refiner = OutlineRefiner(outline_faces(arena.footprints), params_from_ros(RefineParams, "outline/"))
-        self.smoother = CorrectionSmoother(float(g("~correction_rate", 1.0)), float(g("~yaw_correction_rate", 0.1)))
-        self.scan_period = float(g("~scan_period", 0.2))
-        self.outdoor_memory = float(g("~outdoor_memory", 10.0))   # s of observations kept while GNSS is valid
-        self.laser_offset = (float(g("~laser_offset_x", 0.0)), float(g("~laser_offset_y", 0.0)))
-        self.scans: deque = deque(maxlen=10)        # (stamp s, LaserScan) waiting for their SLAM pose
-        self.last = -math.inf
-        self.frame_changes = 0
-        self.state = None                          # (observed, yaw_observed) last logged
-
-    def on_scan(self, msg: LaserScan) -> None:
-        self.scans.append((msg.header.stamp.to_sec(), msg))
-
-    def update(self, core: IndoorPose, t: float, pose: tuple, z: float) -> None:
-        """After core.on_slam for a SLAM pose (t, pose in the map frame); z: the robot's height (arena)."""
-        if core.frame_changes != self.frame_changes:      # a SLAM jump: the kept walls are in an old frame
-            self.frame_changes = core.frame_changes
-            self.refiner.reset()
-            self.smoother.reset()
-            core.correction = IDENTITY
-            rospy.logwarn("indoor_pose: outline: SLAM frame changed, refinement starts again")
-        anchor = core.anchor
-        if anchor is None:
-            return
-        if t - self.last >= self.scan_period or t < self.last:
-            scan = next((m for st, m in tuple(self.scans) if abs(st - t) < SCAN_STAMP_MATCH), None)
-            # outdoors the old observations go first; one fit for both (the scan's, or a refit)
-            dropped = core.gnss_valid and self.refiner.forget_before(t - self.outdoor_memory, anchor, refit=False)
-            found = []
-            if scan is not None and math.isfinite(z):
-                self.last = t
-                pts = scan_points(scan.ranges, scan.angle_min, scan.angle_increment, range_min=scan.range_min,
-                                  range_max=scan.range_max)
-                found = self.refiner.on_scan(t, pose, z, anchor, pts, self.laser_offset, core.gnss_valid)
-                self._log()
-            if dropped and not found:
-                self.refiner.refit(anchor)
-        at = anchor.apply(pose[0], pose[1], 0.0)[:2]
-        # on GNSS nobody flies on this pose (the robots fly on the UAL's): the correction applies at once, so
-        # that the pose is right when the fix goes; a direction first observed in the window's wall, 1 m
-        # off, took a second at ~correction_rate and the first second indoors was 0.57 m off (realistic
-        # seed 107 at rtf 4)
-        core.correction = self.smoother.step(t, self.refiner.correction.transform, at, at_once=core.gnss_valid)
-
-    def _log(self) -> None:
-        for e in self.refiner.pop_events():
-            rospy.logwarn_throttle(THROTTLE, f"indoor_pose: {e}")
-        c = self.refiner.correction
-        if (c.observed, c.yaw_observed) != self.state:
-            self.state = (c.observed, c.yaw_observed)
-            p = c.pivot
-            x, y, _ = c.transform.apply(p[0], p[1], 0.0)
-            rospy.loginfo(f"indoor_pose: outline: {c.observed} direction(s) and {'the' if c.yaw_observed else 'no'} "
-                          f"yaw observed on {c.walls} wall(s): correction ({x - p[0]:+.2f}, {y - p[1]:+.2f}) m, "
-                          f"{c.transform.theta:+.3f} rad; walls {c.thickness:.2f} m thick")
+def outline_refinement_from_ros(arena) -> OutlineRefinement:
+    """The node's OutlineRefinement, its params read from `~` (README, "Params")."""
+    g = rospy.get_param
+    return OutlineRefinement(
+        arena, params_from_ros(RefineParams, "outline/"), correction_rate=float(g("~correction_rate", 1.0)),
+        yaw_correction_rate=float(g("~yaw_correction_rate", 0.1)), scan_period=float(g("~scan_period", 0.2)),
+        outdoor_memory=float(g("~outdoor_memory", 10.0)),
+        laser_offset=(float(g("~laser_offset_x", 0.0)), float(g("~laser_offset_y", 0.0))),
+        info=rospy.loginfo, warn=lambda m: rospy.logwarn_throttle(THROTTLE, m))
 
 
 class IndoorPoseNode:
@@ -120,7 +65,7 @@ class IndoorPoseNode:
         world = str(g("~world_file", ""))
         arena = load_arena(world) if world else ARENA      # its public outline only
         self.core = IndoorPose(params_from_ros(Params, ""), arena.footprints)
-        self.outline = OutlineRefinement(arena) if bool(g("~outline_refinement", True)) else None
+        self.outline = outline_refinement_from_ros(arena) if bool(g("~outline_refinement", True)) else None
         resume, pause = float(g("~resume_mapping_within", 8.0)), float(g("~pause_mapping_beyond", 10.0))
         if 0 < pause < resume:
             rospy.logerr(f"indoor_pose: ~resume_mapping_within {resume} m is beyond ~pause_mapping_beyond {pause} m: "

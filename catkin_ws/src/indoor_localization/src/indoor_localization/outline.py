@@ -203,6 +203,7 @@ class OutlineRefiner:
         # the observations that taught it (forgotten outdoors, cleared with a new map) as the prior
         self.thickness_prior = (params.thickness, params.thickness_sigma)
         self.gnss_valid = True           # as of the last scan
+        self.range_max = math.inf        # the last scan's laser reach
         self.correction = self._no_correction()
         self.events: list = []
 
@@ -246,7 +247,8 @@ class OutlineRefiner:
                 del self.walls[key]
         dropped = sum(len(q) for q in self.walls.values()) < before
         if not self.walls:
-            self.correction = self._no_correction()
+            # nothing observed any more: the last correction holds (the GNSS error it measured drifts slowly)
+            self.correction = replace(self._no_correction(), transform=self.correction.transform)
         elif dropped and refit:
             self._fit(anchor)
         return dropped
@@ -266,12 +268,13 @@ class OutlineRefiner:
 
     # ---------------------------------------------------------------- one scan
     def on_scan(self, t: float, pose: tuple, z: float, anchor: Anchor, points: np.ndarray,
-                laser_offset: tuple = (0.0, 0.0), gnss_valid: bool = True) -> list:
+                laser_offset: tuple = (0.0, 0.0), gnss_valid: bool = True, range_max: float = math.inf) -> list:
         """pose: the SLAM pose (x, y, yaw) at the scan's stamp (map frame); z: the laser's height in the
-        arena; points: (N, 2) returns in the laser frame; gnss_valid: the robot has a fix (outside).
-        Returns the wall observations it made (and keeps them); fits the correction again when there is
-        one."""
+        arena; points: (N, 2) returns in the laser frame; gnss_valid: the robot has a fix (outside);
+        range_max: the laser's (no end is seen where its reach ends). Returns the wall observations it made
+        (and keeps them); fits the correction again when there is one."""
         self.gnss_valid = gnss_valid
+        self.range_max = range_max if range_max > 0 else math.inf
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         origin = (x + c * laser_offset[0] - s * laser_offset[1], y + s * laser_offset[0] + c * laser_offset[1])
@@ -420,8 +423,9 @@ class OutlineRefiner:
             if abs(s_last - s_end_pred) > self._gate(vk, False):
                 continue
             end_xy = np.array(f.a) + u * sign * s_last + n * d_line
-            if math.hypot(end_xy[0] - robot[0], end_xy[1] - robot[1]) > p.end_max_range:
-                continue
+            reach = math.hypot(end_xy[0] - robot[0], end_xy[1] - robot[1])
+            if reach > p.end_max_range or reach + 1.0 > self.range_max:
+                continue                                    # too far, or where the laser's reach ends
             tail = np.sort(s[s > s_last - 1.0])                # the line's returns of its last metre
             bins = np.unique(np.floor((s_last - tail) / COVERAGE_BIN)).size
             if bins < p.end_coverage * (1.0 / COVERAGE_BIN):
@@ -618,20 +622,25 @@ class OutlineRefiner:
         return float((w * r).sum() / w.sum()), math.sqrt(max(float(j @ cov @ j), 0.0))
 
     def _correction(self, rows: dict, use: np.ndarray, x: np.ndarray, cov: np.ndarray) -> Correction:
-        """The fitted x as a correction, each direction corrected only once observed."""
+        """The fitted x as a correction, each direction corrected once observed; along a direction not (or no
+        longer) observed the last correction holds. Why (c3_floor_plan_b seed 101, rtf 4): a UAV's error along
+        facade B, corrected from the facade's corners, came back (0.6 m) when their observations aged out
+        1 s before it entered: within a metre of the facade's line its ends are not looked for."""
         p = self.p
+        pivot = rows["pivot"]
+        hx, hy, _ = self.correction.transform.apply(pivot[0], pivot[1], 0.0)
+        held = np.array([hx - pivot[0], hy - pivot[1]])
         shift, dyaw = x[:2].copy(), float(x[2])
         vals, vecs = np.linalg.eigh(cov[:2, :2])
         observed = 0
         for val, v in zip(vals, vecs.T):
             if math.sqrt(max(val, 0.0)) > p.max_std:
-                shift -= float(v @ shift) * v
+                shift += float(v @ (held - shift)) * v
             else:
                 observed += 1
         yaw_observed = math.sqrt(cov[2, 2]) <= p.max_yaw_std
         if not yaw_observed:
-            dyaw = 0.0
-        pivot = rows["pivot"]
+            dyaw = self.correction.transform.theta
         c, s = math.cos(dyaw), math.sin(dyaw)
         t = pivot + shift - np.array([c * pivot[0] - s * pivot[1], s * pivot[0] + c * pivot[1]])
         walls = len({k for k, u in zip(rows["key"], use) if u})
