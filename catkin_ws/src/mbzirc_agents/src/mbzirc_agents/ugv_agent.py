@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 from typing import Any, Dict, Optional, Sequence
 
+from mbzirc_arena.c3 import ARENA
 from mbzirc_arena.routing import path_length, plan_2d
 from mbzirc_arena.yaw import wrap_angle
 
@@ -42,6 +43,12 @@ class UgvAgent(RobotAgent):
         merged.update(params)
         super().__init__(agent_id, backend, merged, namespace)
         register_tasks(self, UGV_TASKS, UGV_SUB_TASKS)
+
+    def _detectors_pose(self, msg: Any) -> Any:
+        """agent/pose on the ground (the arena's z 0, the tower's ground floor: the UGV drives on nothing else),
+        so that its fire detector places fires at true heights as the UAVs' do (UavAgent._detectors_pose), not
+        with its vertical GNSS error (0.3-0.5 m) in them."""
+        return self._pose_msg_at(msg, msg.pose.position.x, msg.pose.position.y, ARENA.floor_heights[0])
 
     def check_point(self, p, what: str = 'waypoint') -> None:
         """The UGV ignores z: only x, y must be finite and inside the arena."""

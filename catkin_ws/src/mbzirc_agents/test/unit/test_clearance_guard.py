@@ -180,3 +180,18 @@ def test_the_detectors_pose_is_at_the_true_height_by_the_altimeter():
         assert _detectors_z(be) == pytest.approx(ual.pos[2] + 0.6, abs=0.02)
     finally:
         stop_agent(agent, ual, be)
+
+
+def test_the_ugvs_detectors_pose_is_on_the_ground_whatever_its_gnss_height():
+    """The UGV drives on the ground (the arena's z 0, the tower's ground floor): its fire detector places fires
+    at true heights as the UAVs' do, not with its vertical GNSS error (0.6 m here) in them."""
+    from fake_ual import start_ugv
+    be = FakeBackend()
+    agent, ual = start_ugv(be, (5.0, 5.0, 0.0), speedup=1.0)
+    try:
+        ual.gnss_bias = np.array([0.3, 0.0, 0.6])
+        be.clock.sleep(2.0)
+        assert agent.position()[2] == pytest.approx(0.6, abs=0.02)        # the UAL's: GNSS
+        assert _detectors_z(be) == pytest.approx(0.0, abs=1e-9)
+    finally:
+        stop_agent(agent, ual, be)
