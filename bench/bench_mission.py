@@ -41,7 +41,8 @@ def run_seed(seed: int, args: argparse.Namespace, out_root: str) -> dict:
            f"UNCERTAINTY={args.uncertainty}", f"INDOOR_SEARCH={getattr(args, 'indoor_search', 'explore')}",
            f"GNSS_DENIED_INDOORS={switch[getattr(args, 'gnss_denied_indoors', 'profile')]}",
            f"INDOOR_SLAM={switch[getattr(args, 'indoor_slam', '')]}",
-           f"WORLD={world_path(getattr(args, 'world', ''))}"]
+           f"WORLD={world_path(getattr(args, 'world', ''))}",
+           f"RECORD_SLAM={1 if getattr(args, 'record_slam', False) else 0}"]
     t0 = time.time()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sampler = NodeCpuSampler(proc.pid).start()
@@ -196,6 +197,9 @@ def main() -> int:
     ap.add_argument("--world", default="",
                     help="a ual_sim world yaml, or the name of one of ual_sim's (c3_floor_plan_b: other interior "
                          "walls, doorways and indoor fire places); its name is added to the result file's")
+    ap.add_argument("--record-slam", action="store_true",
+                    help="each seed's slam.bag (run_mission.sh RECORD_SLAM=1): its indoor poses replayed offline "
+                         "(indoor_localization's replay_slam_bag); costs a little CPU")
     ap.add_argument("--runs-dir", default=None,
                     help="where each trial's folder (summary, report, logs) goes")
     args = ap.parse_args()
