@@ -199,7 +199,7 @@ def main() -> int:
                          "walls, doorways and indoor fire places); its name is added to the result file's")
     ap.add_argument("--record-slam", action="store_true",
                     help="each seed's slam.bag (run_mission.sh RECORD_SLAM=1): its indoor poses replayed offline "
-                         "(indoor_localization's replay_slam_bag); costs a little CPU")
+                         "(bench/replay_slam_bag.py); costs a little CPU")
     ap.add_argument("--runs-dir", default=None,
                     help="where each trial's folder (summary, report, logs) goes")
     args = ap.parse_args()

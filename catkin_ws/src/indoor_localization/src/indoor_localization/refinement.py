@@ -1,6 +1,6 @@
 """OutlineRefinement: the anchor's refinement by the building outline seen in the scans (outline.py), wired to
 the anchored pose (anchor.IndoorPose) as the node runs it, without ROS: the node feeds it live, the bag
-replay (scripts/replay_slam_bag) feeds it a recorded trial, and both run the same code.
+replay (bench/replay_slam_bag.py) feeds it a recorded trial, and both run the same code.
 
 Rules: each scan is paired with the SLAM pose of the same stamp, at most every `scan_period` s; outdoors
 (GNSS valid) the observations older than `outdoor_memory` s go first; a change of the SLAM map frame (a

@@ -1,4 +1,4 @@
-"""scripts/replay_slam_bag on a small bag written here: a robot flies 10 s, its fix lost at 5 s, hector's map
+"""bench/replay_slam_bag.py on a small bag written here: a robot flies 10 s, its fix lost at 5 s, hector's map
 frame 2 m and 0.3 rad off the arena's; the replay anchors it and scores the period without GNSS."""
 import math
 import os
@@ -10,7 +10,7 @@ import rospy
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, Quaternion
 from sensor_msgs.msg import NavSatStatus
 
-SCRIPT = os.path.join(os.path.dirname(__file__), '..', '..', 'scripts', 'replay_slam_bag')
+SCRIPT = os.path.join(os.path.dirname(__file__), '..', 'bench', 'replay_slam_bag.py')
 THETA, TX, TY = 0.3, 2.0, -1.0            # arena <- map
 
 

@@ -2,7 +2,7 @@
 """Replay one robot of a recorded trial's slam.bag (tools/run_mission.sh RECORD_SLAM=1) through the indoor pose
 offline, with the code of the working tree, and print its log and its pose error against the truth.
 
-    rosrun indoor_localization replay_slam_bag results/<trial>/slam.bag 2 [--from 240] [--to 380] [--every 0.5]
+    python bench/replay_slam_bag.py results/<trial>/slam.bag 2 [--from 240] [--to 380] [--every 0.5]
 
 The node's wiring (node.py) without ROS: ual/pose, ual/gnss_status and slam_out_pose in the order they were
 recorded, the scans for the outline refinement, the mapping gate every 0.2 s. The SLAM poses are the
