@@ -22,8 +22,7 @@ wall only centred enough that its frame (`~frame_radius`) clears the sensed edge
 crosses it briskly (`~opening_pass_speed`) held hard to the middle (`~opening_lateral_gain`, up to
 `~opening_lateral_vmax`), and never goes forward with its frame over an edge (`_pass_velocity`).
 
-Safety: the laser blind (every beam NaN) or silent -> the robot holds; while no opening is seen it holds the
-place it looks from on its pose (zero velocity alone lets gusts carry it); an opening not found and centred in
+Safety: the laser blind (every beam NaN) or silent -> the robot holds; an opening not found and centred in
 `~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
 robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
 nearer than `~opening_keep_off` (control.keep_off_return); no progress through it for `~opening_timeout`
@@ -527,7 +526,6 @@ class LaserPassage:
         t0 = a.backend.now()
         allowed = a.p.opening_timeout            # + the time to slide to an opening first seen far aside
         centred = 0
-        looking_from = np.array(a.position()[:2], dtype=float)
         while True:
             self._check(task)
             if a.backend.now() - t0 > allowed:
@@ -544,18 +542,11 @@ class LaserPassage:
             # the height first: at a GNSS height a metre off, the laser's plane may miss the window
             vz, z_ok = self._vertical(height) if scan is not None else (0.0, False)
             if seen is None:
-                # hold the place it looks from: zero velocity alone lets the gusts carry it (realistic seed 103,
-                # rtf 4: 1.9 m in 10 s at facade B's split window, into the interior wall's end behind it)
-                back = ctl.gain * (looking_from - np.asarray(here[:2], dtype=float))
-                speed = float(np.hypot(back[0], back[1]))
-                if speed > ctl.lateral_vmax:
-                    back *= ctl.lateral_vmax / speed
-                self._command(np.array(world_to_body((back[0], back[1], 0.0), here[3])[:2]), heading, scan, vz)
+                self._command(np.zeros(2), heading, scan, vz)
                 task.feedback('FINDING', f'looking for the {kind} with the laser')
                 a.backend.sleep(dt)
                 continue
             self._check_jump(seen, kind)
-            looking_from = np.array(here[:2], dtype=float)      # an opening lost from sight: held from here
             if allowed == a.p.opening_timeout:      # at the first sight: time to slide there, then to centre
                 allowed += 2.0 * abs(seen.lateral) / max(0.1, ctl.lateral_vmax)
             expected = seen.lateral
