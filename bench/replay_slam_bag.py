@@ -24,32 +24,15 @@ from indoor_localization.mapping_gate import MappingGate
 from indoor_localization.outline import RefineParams
 from indoor_localization.refinement import OutlineRefinement
 from mbzirc_arena.c3 import ARENA
+from mbzirc_arena.yaw import yaw_from_quaternion
 
 GATE_PERIOD = 0.2            # s, the node's SOURCE_CHECK_PERIOD
 MAX_POSE_GAP = 0.25          # s: a truth sample between poses further apart is not scored (the referee's rule)
 
 
 def yaw_of(q) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-class Truth:
-    """The robot's true x, y from /sim/robots, interpolated."""
-
-    def __init__(self):
-        self.t, self.xy = [], []
-
-    def add(self, t, x, y):
-        self.t.append(t)
-        self.xy.append((x, y))
-
-    def at(self, t):
-        i = bisect.bisect_left(self.t, t)
-        if i == 0 or i >= len(self.t) or self.t[i] - self.t[i - 1] > 1.0:
-            return None
-        w = (t - self.t[i - 1]) / (self.t[i] - self.t[i - 1])
-        (x0, y0), (x1, y1) = self.xy[i - 1], self.xy[i]
-        return x0 + w * (x1 - x0), y0 + w * (y1 - y0)
+    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
+    return math.nan if yaw is None else yaw       # a bad orientation: the core drops the pose, saying why
 
 
 def main() -> int:
@@ -74,7 +57,7 @@ def main() -> int:
     core = IndoorPose(Params(), ARENA.footprints)
     outline = OutlineRefinement(ARENA, refine, info=log("INFO"), warn=log("WARN"))
     gate = MappingGate(ARENA.footprints)
-    truth = Truth()
+    truth_t, truth_xy = [], []       # /sim/robots: the robot's true x, y and their stamps
     poses, flight = [], None           # (t, x, y, source) per pose without GNSS; the flight's start
     flights = []
     now, next_gate, next_print = -math.inf, -math.inf, -math.inf
@@ -86,7 +69,8 @@ def main() -> int:
         if topic == "/sim/robots":
             if args.robot < len(m.poses):
                 p = m.poses[args.robot].position
-                truth.add(m.header.stamp.to_sec(), p.x, p.y)
+                truth_t.append(m.header.stamp.to_sec())
+                truth_xy.append((p.x, p.y))
             continue
         name = topic[len(ns):]
         if name == "scan":
@@ -123,7 +107,7 @@ def main() -> int:
     # at each truth sample (the referee's way: its 2 Hz samples are exact, the 15 Hz poses interpolated)
     errors = []                        # (t, error) at the truth's samples without GNSS
     pt = [q[0] for q in poses]
-    for t, (tx, ty) in zip(truth.t, truth.xy):
+    for t, (tx, ty) in zip(truth_t, truth_xy):
         i = bisect.bisect_left(pt, t)
         if i == 0 or i >= len(poses) or poses[i][0] - poses[i - 1][0] > MAX_POSE_GAP:
             continue

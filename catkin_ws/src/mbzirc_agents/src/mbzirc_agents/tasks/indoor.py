@@ -649,7 +649,7 @@ class ExtinguishIndoorFire(AgentTask):
         # strip met the strip's wall three times, the guard held it, the fire was given up). Not in-sight
         # explorers (the UAVs): they water only fires in sight of where they came in, and pass no doorway
         if not a.p.explore_in_sight:
-            pos = (*self.passage.doorway(pos)[:3],)
+            pos = tuple(self.passage.doorway(pos))
         pos = self._laser_standoff(pos)
         self.feedback('APPROACHING', f'facing fire {ud.fire_id}')
         yaw = self._approach(ud.fire_id, fire, pos, yaw)
