@@ -22,8 +22,9 @@ wall only centred enough that its frame (`~frame_radius`) clears the sensed edge
 crosses it briskly (`~opening_pass_speed`) held hard to the middle (`~opening_lateral_gain`, up to
 `~opening_lateral_vmax`), and never goes forward with its frame over an edge (`_pass_velocity`).
 
-Safety: the laser blind (every beam NaN) or silent -> the robot holds; an opening not found and centred in
-`~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
+Safety: the laser blind (every beam NaN) or silent -> the robot holds; while no opening is seen it holds the
+place it looks from on the UAL's velocity integral (zero velocity alone lets gusts carry it; the pose steps);
+an opening not found and centred in `~opening_timeout` s, or whose middle jumps more than `~opening_jump_max` between two scans beyond the
 robot's own motion -> TaskError with the robot holding; in the opening no velocity towards a laser return
 nearer than `~opening_keep_off` (control.keep_off_return); no progress through it for `~opening_timeout`
 s, or (a UAV) for WALL_STALL s once its frame is in the wall's reach -> the robot backs out the way it came in (to
@@ -482,6 +483,22 @@ class LaserPassage:
             v = keep_off_return(v, p[3], d, ang, a.p.opening_keep_off)
         a.send_velocity(v, yaw_rate_to(p[3], heading))
 
+    def _hold_place(self, place: Optional[np.ndarray], yaw: float, ctl: OpeningPassage) -> np.ndarray:
+        """The body (vx, vy) back to place, a point of the UAL's velocity integral (`travelled`), at the
+        centring's gain and speed limit; zero without one. Why: on zero velocity the gusts carry a UAV that
+        looks for its opening (realistic seed 103, rtf 4: 1.9 m in 10 s at facade B's split floor-1 window,
+        into the interior wall's end behind it). Why not on its pose: the pose steps with a GNSS jump accepted,
+        a localization correction or the UAL's frame change, and a hold on it flies the robot by the step
+        (a jump accepted while a UAV looked for its window flew it 2 m off); the integral has no steps."""
+        now = self.agent.travelled()
+        if place is None or now is None:
+            return np.zeros(2)
+        back = ctl.gain * (np.asarray(place, dtype=float) - now)
+        speed = float(np.hypot(back[0], back[1]))
+        if speed > ctl.lateral_vmax:
+            back *= ctl.lateral_vmax / speed
+        return np.array(world_to_body((back[0], back[1], 0.0), yaw)[:2])
+
     def _hold(self, heading: float) -> None:
         a = self.agent
         a.send_velocity((0.0, 0.0, 0.0), yaw_rate_to(a.position()[3], heading))
@@ -526,6 +543,7 @@ class LaserPassage:
         t0 = a.backend.now()
         allowed = a.p.opening_timeout            # + the time to slide to an opening first seen far aside
         centred = 0
+        looking_from = a.travelled()             # where it holds while it sees no opening (odometer frame)
         while True:
             self._check(task)
             if a.backend.now() - t0 > allowed:
@@ -542,11 +560,14 @@ class LaserPassage:
             # the height first: at a GNSS height a metre off, the laser's plane may miss the window
             vz, z_ok = self._vertical(height) if scan is not None else (0.0, False)
             if seen is None:
-                self._command(np.zeros(2), heading, scan, vz)
+                self._command(self._hold_place(looking_from, here[3], ctl), heading, scan, vz)
+                if looking_from is None:
+                    looking_from = a.travelled()
                 task.feedback('FINDING', f'looking for the {kind} with the laser')
                 a.backend.sleep(dt)
                 continue
             self._check_jump(seen, kind)
+            looking_from = None                      # an opening lost from sight: held from where it is then
             if allowed == a.p.opening_timeout:      # at the first sight: time to slide there, then to centre
                 allowed += 2.0 * abs(seen.lateral) / max(0.1, ctl.lateral_vmax)
             expected = seen.lateral
