@@ -241,6 +241,41 @@ def test_a_slam_jump_indoors_is_relocalized_on_a_new_map_anchored_by_dead_reckon
     assert all(o.source == NONE for t, o, _ in outputs if o is not None and jump_at <= t < trusted[0])
 
 
+def test_realistic_104_a_new_map_whose_origin_pose_has_no_ual_pose_is_anchored_at_its_next_paired_pose():
+    """Realistic seed 104 (rtf 4, a busy machine): after a jump the new map came, but no UAL pose reached the
+    node within max_pair_gap of its origin pose; the core waited for another pose exactly at the origin,
+    none came, and UAV 3 had no pose inside floor 2 for the last 630 s. The new map is anchored at its first
+    pose that pairs with a UAL pose, wherever the map puts it."""
+    core = IndoorPose()
+    jump_at = 20.0
+    state = {'reset_at': None, 'new_map': None}
+    reported = core.on_reported
+
+    def late_reports(t, *pose):                   # none from just before the reset to 1 s after it
+        if state['reset_at'] is None or not (state['reset_at'] - 0.3 <= t <= state['reset_at'] + 1.0):
+            reported(t, *pose)
+    core.on_reported = late_reports
+
+    def slam_pose(t, x, y, yaw):
+        if core.take_reset_request():
+            state['reset_at'] = t
+        if state['new_map'] is None and state['reset_at'] is not None and t >= state['reset_at'] + 0.1:
+            state['new_map'] = (yaw, x, y)
+        if state['new_map'] is None:
+            mx, my, myaw = to_map(x, y, yaw)
+            return (mx + 2.0 if t >= jump_at else mx), my, myaw
+        th, ox, oy = state['new_map']
+        c, s_ = math.cos(th), math.sin(th)
+        return c * (x - ox) + s_ * (y - oy), -s_ * (x - ox) + c * (y - oy), wrap_angle(yaw - th)
+    flown = fly(core, 29.0, (0.0, 0.0), slam_pose=slam_pose)
+    events = core.pop_events()
+    assert any(e.startswith("re-localized") for e in events), events
+    after = [(t, o, tr) for t, o, tr in flown if o is not None and o.source == SLAM and t > jump_at]
+    assert after and after[0][0] < state['reset_at'] + 1.5, events
+    errors = [math.hypot(o.x - tr[0], o.y - tr[1]) for t, o, tr in after]
+    assert max(errors) < 0.2, max(errors)
+
+
 def test_a_relocalization_whose_new_map_never_comes_gives_up_until_the_fix_returns():
     core = IndoorPose(Params(relocalize_timeout=3.0))
     out = fly(core, 40.0, (0.0, 0.0), jump_at=20.0)     # the simulated SLAM never starts a new map
