@@ -105,6 +105,21 @@ def test_a_uav_enters_a_window_a_metre_off_its_gnss(uav, z_shift):
     assert any('centred on the window' in m for m in be.infos), be.infos
 
 
+def test_realistic_plan_b_103_a_uav_enters_a_room_shallower_than_the_entry_depth(uav):
+    """c3_floor_plan_b seed 103 (realistic): facade B's floor-2 window opens on a strip 2.7 m deep; the way in
+    (~entry_depth from the entry pose) ended 1 m beyond the strip's interior wall, the UAV held by it
+    (~opening_keep_off) short of the end, 'not through the window', backed out, three times: the strip's
+    fire was never looked for. Here a strip 2.2 m deep behind the window: in, stopping before its wall."""
+    agent, ual, be, scene = uav
+    strip_wall = (12.0, WALL_Y[0] - 2.2 - 0.2, 19.0, WALL_Y[0] - 2.2)        # y 16.9-17.1
+    scene.boxes = lambda z: wall_boxes(z, shift=(-1.0, 0.0)) + [strip_wall]
+    track = enter_inside_the_window(be, ual)
+    assert ual.pos[1] < WALL_Y[0] - UAV_R, f'not inside: {ual.pos}'
+    assert ual.pos[1] - strip_wall[3] > UAV_R, f'at the strip\'s wall: {ual.pos}'
+    assert any('short of the passage' in m for m in be.infos), be.infos
+    assert track.xs
+
+
 def test_the_straight_leg_of_old_hits_the_frame(uav):
     """The same entry without the laser (~laser_openings false): the UAV crosses the wall outside the
     window, a crash in the simulator (the check above can fail). Without the leg guard too (leg_guard.py:

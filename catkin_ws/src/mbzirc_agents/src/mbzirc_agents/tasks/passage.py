@@ -48,7 +48,7 @@ from mbzirc_arena.yaw import wrap_angle
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
 from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
-from ..leg_guard import is_blind, malformed
+from ..leg_guard import corridor_distances, is_blind, malformed
 from ..openings import SeenOpening, find_opening, find_openings, side_clearances
 from .uav_motion import facade_room, hold_box, off_the_facades
 
@@ -61,6 +61,7 @@ VERTICAL_TOLERANCE = 0.15                   # m off a window's middle height tha
 DOORWAY_WIDTH, DOORWAY_TOLERANCE = 2.2, 0.8
 WALL_PASSED = 0.5          # m beyond the wall's face (its thickness and more) where an opening is passed
 PROGRESS_STEP = 0.1        # m along the way through that counts as progress (restarts the stall clock)
+ROOM_END_MARGIN = 0.2      # m beyond ~opening_keep_off: a return this near ahead, clear of the wall, ends the way in
 # m more past the wall before a passage is done: its progress is measured on GNSS, whose error moves by a
 # few decimetres while the robot goes through (realistic seed 101: a UAV that had entered floor 2 by facade
 # B's window was truly 0.33 m off the wall's inner face and hit it going down to its search height)
@@ -483,6 +484,17 @@ class LaserPassage:
             v = keep_off_return(v, p[3], d, ang, a.p.opening_keep_off)
         a.send_velocity(v, yaw_rate_to(p[3], heading))
 
+    def _room_ahead(self, scan: '_Scan') -> float:
+        """m to the nearest return straight ahead within the frame's half width (`~frame_radius`), in the
+        scan's own frame; inf: none."""
+        msg = scan.msg
+        r = np.asarray(msg.ranges, dtype=float)
+        angles = msg.angle_min + msg.angle_increment * np.arange(r.size)
+        ok = np.isfinite(r) & (r >= msg.range_min)
+        points = np.stack([r[ok] * np.cos(angles[ok]), r[ok] * np.sin(angles[ok])], axis=1)
+        ahead = corridor_distances(points, (0.0, 0.0), (1.0, 0.0), self.agent.p.frame_radius, math.inf)
+        return float(ahead.min()) if len(ahead) else math.inf
+
     def _hold_place(self, place: Optional[np.ndarray], yaw: float, ctl: OpeningPassage) -> np.ndarray:
         """The body (vx, vy) back to place, a point of the UAL's velocity integral (`travelled`), at the
         centring's gain and speed limit; zero without one. Why: on zero velocity the gusts carry a UAV that
@@ -645,6 +657,15 @@ class LaserPassage:
                 task.feedback('HOLDING', f'in the {kind}: no usable scan')
                 a.backend.sleep(dt)
                 continue
+            if wall is not None and done >= clear_at:
+                ahead = self._room_ahead(scan)
+                if ahead <= a.p.opening_keep_off + ROOM_END_MARGIN:
+                    # clear of the wall, the room ends before `length` (c3_floor_plan_b seed 103, realistic:
+                    # facade B's floor-2 window into a 2.7 m deep strip; held by its interior wall 1 m short of
+                    # the entry depth, UAV 2 backed out 3 times and the strip's fire was never looked for)
+                    a.backend.loginfo(f'[{task.name}] through the {kind}: a return {ahead:.2f} m ahead, '
+                                      f'{length - done:.1f} m short of the passage\'s length: in, stopping here')
+                    return
             msg = scan.msg
             # the pose the scan was taken at, in the odometer's frame (as p): at its stamp, or when it came
             then = odometer.at(scan.stamp if scan.stamp > 0.0 else scan.received, self._scan_pose(scan))
