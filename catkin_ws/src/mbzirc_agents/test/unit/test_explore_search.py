@@ -42,7 +42,7 @@ def scene(request):
     mode, inner, fire, noisy = (request.param, INNER, FIRE, False) if isinstance(request.param, str) else request.param
     be = FakeBackend()
     agent, ual = start_ugv(be, (14.25, 8.0, 0.0), {'check_fire_time': 1.0, 'indoor_search': mode,
-                                                   'explore_budget': 600.0})
+                                                   'explore_budget': 600.0}, speedup=4.0)
     ual.yaw = math.pi / 2
     ual.follow_velocity = True
     boxes = wall_boxes(0.9) + inner
