@@ -30,7 +30,8 @@ Rules:
 - with a view range, standable cells farther than it from every point the robot looked from count as
   frontiers too (the laser sees a whole room from its door, the thermal camera a fire only nearer), and,
   with the wall faces watched (wall_faces.py), standable cells within half of it that see a face no look
-  watched, after every other viewpoint (each such leg may cross a doorway again for one face);
+  watched (ranked by their cost alone: near a wall by design, they would else come after every clear
+  frontier, in other rooms, and the robot leave a room with a wall it never looked at);
 - `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
   UAV in a window's room, which must come back out the same way).
 Pure geometry here (no ROS); the task using it is tasks/explore.py.
@@ -260,7 +261,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     not this search's to pass), and outline_clearance when more, whatever the laser sees there (a UAV's laser plane looks out through a window and never sees the wall
     under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). watched
     (with view_range; wall_faces.new_watched): cells within half view_range of a wall face no look has
-    watched, that see it, are viewpoints after every other (wall_faces.near_unwatched_faces): a UAV kept off the outline
+    watched, that see it, are viewpoints too, ranked by cost alone (wall_faces.near_unwatched_faces): a UAV kept off the outline
     is no longer brought near the walls by the standable cells beyond view_range, and a wall between
     view_range and view_range + clearance from every look (no standable cell farther) is still looked at
     (c3_floor_plan_b seed 101: the UGV looked around 4.0 m from the wall of fire in0_w, never nearer).
@@ -280,7 +281,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
         in_sight[origin] = True
     parent, costs = paths_from(passable, start, space.cost)
     targets = [c for group in frontiers(grid, passable, min_frontier) for c in group]
-    faces_only = set()                # viewpoints for a wall face alone: after every other (module docstring)
+    faces_only = set()                # viewpoints for a wall face alone (module docstring)
     if view_range > 0:
         targets += unviewed(grid, passable, viewed, view_range)
         if watched is not None:
@@ -293,7 +294,9 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
             continue
         if origin is not None and not grid.line_free(in_sight, origin, c):
             continue
-        rank = (c in faces_only, clear[c] < view_clearance, costs[c])
+        # a wall face's viewpoint is near its wall by design: it is not ranked after the clear ones, so that
+        # the nearest face of the room the robot is in is looked at before it leaves for the next room
+        rank = (clear[c] < view_clearance and c not in faces_only, costs[c])
         if best is None or rank < best[0]:
             best = (rank, c)
     if best is None:
