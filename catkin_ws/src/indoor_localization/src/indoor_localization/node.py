@@ -54,6 +54,7 @@ def outline_refinement_from_ros(arena) -> OutlineRefinement:
     return OutlineRefinement(
         arena, params_from_ros(RefineParams, "outline/"), correction_rate=float(g("~correction_rate", 1.0)),
         yaw_correction_rate=float(g("~yaw_correction_rate", 0.1)), scan_period=float(g("~scan_period", 0.2)),
+        crossing_at_once=float(g("~crossing_at_once", 1.0)),
         outdoor_memory=float(g("~outdoor_memory", 10.0)),
         laser_offset=(float(g("~laser_offset_x", 0.0)), float(g("~laser_offset_y", 0.0))),
         info=rospy.loginfo, warn=lambda m: rospy.logwarn_throttle(THROTTLE, m))
