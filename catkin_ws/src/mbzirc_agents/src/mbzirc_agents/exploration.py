@@ -30,8 +30,9 @@ Rules:
 - with a view range, standable cells farther than it from every point the robot looked from count as
   frontiers too (the laser sees a whole room from its door, the thermal camera a fire only nearer), and,
   with the wall faces watched (wall_faces.py), standable cells within half of it that see a face no look
-  watched (ranked by their cost alone: near a wall by design, they would else come after every clear
-  frontier, in other rooms, and the robot leave a room with a wall it never looked at);
+  watched and farther than half of it from every look-around (a noisy laser makes new faces near them):
+  within the view range of the robot along the free space with the clear viewpoints (the room it is in
+  is finished first), farther after every other viewpoint;
 - `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
   UAV in a window's room, which must come back out the same way).
 Pure geometry here (no ROS); the task using it is tasks/explore.py.
@@ -261,7 +262,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     not this search's to pass), and outline_clearance when more, whatever the laser sees there (a UAV's laser plane looks out through a window and never sees the wall
     under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). watched
     (with view_range; wall_faces.new_watched): cells within half view_range of a wall face no look has
-    watched, that see it, are viewpoints too, ranked by cost alone (wall_faces.near_unwatched_faces): a UAV kept off the outline
+    watched, that see it, are viewpoints too (wall_faces.near_unwatched_faces; ranked as the module says): a UAV kept off the outline
     is no longer brought near the walls by the standable cells beyond view_range, and a wall between
     view_range and view_range + clearance from every look (no standable cell farther) is still looked at
     (c3_floor_plan_b seed 101: the UGV looked around 4.0 m from the wall of fire in0_w, never nearer).
@@ -285,7 +286,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     if view_range > 0:
         targets += unviewed(grid, passable, viewed, view_range)
         if watched is not None:
-            faces_only = set(near_unwatched_faces(grid, ok, watched, view_range)) - set(targets)
+            faces_only = set(near_unwatched_faces(grid, ok, watched, view_range, viewed)) - set(targets)
     best = None
     done = {grid.cell(p[0], p[1]) for p in reached} - {None}
     for c in set(targets) | faces_only:
@@ -294,9 +295,14 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
             continue
         if origin is not None and not grid.line_free(in_sight, origin, c):
             continue
-        # a wall face's viewpoint is near its wall by design: it is not ranked after the clear ones, so that
-        # the nearest face of the room the robot is in is looked at before it leaves for the next room
-        rank = (clear[c] < view_clearance and c not in faces_only, costs[c])
+        # a wall face's viewpoint is near its wall by design: within view_range of the robot along the free
+        # space it ranks with the clear ones (the walls of the room the robot is in are looked at before it
+        # leaves it: c3_floor_plan_b seed 101), farther after every other (the frontiers first: rooms not
+        # yet seen may hold the fire)
+        face = c in faces_only
+        tier = (0 if face and costs[c] * grid.res <= view_range or not face and clear[c] >= view_clearance
+                else 2 if face else 1)
+        rank = (tier, costs[c])
         if best is None or rank < best[0]:
             best = (rank, c)
     if best is None:
