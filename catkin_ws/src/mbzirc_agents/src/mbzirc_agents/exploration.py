@@ -29,10 +29,8 @@ Rules:
   cells or of the path's own (`straight_legs`), so that every leg is one the leg guard checks;
 - with a view range, standable cells farther than it from every point the robot looked from count as
   frontiers too (the laser sees a whole room from its door, the thermal camera a fire only nearer), and,
-  with the wall faces watched (wall_faces.py), standable cells within half of it that see a face no look
-  watched and farther than half of it from every look-around (a noisy laser makes new faces near them):
-  within the view range of the robot along the free space with the clear viewpoints (the room it is in
-  is finished first), farther after every other viewpoint;
+  when asked (a UAV, kept off the outline), standable cells within half of it of a laser return (a wall)
+  farther than it from every such point;
 - `sight_of` limits a search to what is in straight sight of its start when a caller asks for it (a
   UAV in a window's room, which must come back out the same way).
 Pure geometry here (no ROS); the task using it is tasks/explore.py.
@@ -45,9 +43,7 @@ from typing import Iterable, Optional, Sequence
 
 import numpy as np
 
-from .cell_states import FREE, OCCUPIED, UNKNOWN
-from .wall_faces import near_unwatched_faces
-
+UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 NEIGHBOURS_4 = ((1, 0), (-1, 0), (0, 1), (0, -1))
 NEIGHBOURS_8 = NEIGHBOURS_4 + ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
@@ -245,8 +241,7 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
                    skip: Iterable = (), sight_of: Optional[Sequence[float]] = None,
                    viewed: Sequence = (), view_range: float = 0.0, pass_clearance: Optional[float] = None,
                    view_clearance: float = 0.0, outline_clearance: float = 0.0,
-                   watched: Optional[np.ndarray] = None, min_move: float = 0.0,
-                   reached: Iterable = ()) -> Optional[list]:
+                   view_walls: bool = False, min_move: float = 0.0, reached: Iterable = ()) -> Optional[list]:
     """The legs [(x, y), ...] to the next viewpoint, or None when no frontier is reachable.
 
     The viewpoint is a frontier's cell (or, with viewed and view_range > 0, a standable cell farther than
@@ -260,13 +255,10 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
     straight line of clear cells from this point count (the point's own cell counts as clear: it was
     flown to). Every cell but the robot's own keeps `clearance` from the footprint's outline (a door is
     not this search's to pass), and outline_clearance when more, whatever the laser sees there (a UAV's laser plane looks out through a window and never sees the wall
-    under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). watched
-    (with view_range; wall_faces.new_watched): cells within half view_range of a wall face no look has
-    watched, that see it, are viewpoints too (wall_faces.near_unwatched_faces; ranked as the module says): a UAV kept off the outline
-    is no longer brought near the walls by the standable cells beyond view_range, and a wall between
-    view_range and view_range + clearance from every look (no standable cell farther) is still looked at
-    (c3_floor_plan_b seed 101: the UGV looked around 4.0 m from the wall of fire in0_w, never nearer).
-    min_move: no viewpoint nearer than this to here (a robot
+    under its sill: ideal seed 3 with exploration, two UAVs sent beside their window hit it). view_walls
+    (with view_range): cells near laser returns farther than view_range from every viewed point are
+    viewpoints too (near_unviewed_walls): kept off the outline, the standable cells beyond view_range no
+    longer bring the camera near the outer walls. min_move: no viewpoint nearer than this to here (a robot
     there already, by its arrival tolerance, would not move and see the same again: the on-demand
     ugv_gnss_denied rostest, a frontier cell 0.2 m from the UGV chosen 100 times in 100 s); reached: (x, y)
     viewpoints gone to before, not chosen again (a frontier the laser cannot resolve from there: a cell it
@@ -282,27 +274,19 @@ def next_viewpoint(grid: FloorGrid, here: Sequence[float], clearance: float, min
         in_sight[origin] = True
     parent, costs = paths_from(passable, start, space.cost)
     targets = [c for group in frontiers(grid, passable, min_frontier) for c in group]
-    faces_only = set()                # viewpoints for a wall face alone (module docstring)
     if view_range > 0:
         targets += unviewed(grid, passable, viewed, view_range)
-        if watched is not None:
-            faces_only = set(near_unwatched_faces(grid, ok, watched, view_range, viewed)) - set(targets)
+        if view_walls:
+            targets += near_unviewed_walls(grid, passable, viewed, view_range)
     best = None
     done = {grid.cell(p[0], p[1]) for p in reached} - {None}
-    for c in set(targets) | faces_only:
+    for c in set(targets):
         if c not in parent or c in banned or c in done or c == start \
                 or math.dist(grid.centre(c), here[:2]) < min_move:
             continue
         if origin is not None and not grid.line_free(in_sight, origin, c):
             continue
-        # a wall face's viewpoint is near its wall by design: within view_range of the robot along the free
-        # space it ranks with the clear ones (the walls of the room the robot is in are looked at before it
-        # leaves it: c3_floor_plan_b seed 101), farther after every other (the frontiers first: rooms not
-        # yet seen may hold the fire)
-        face = c in faces_only
-        tier = (0 if face and costs[c] * grid.res <= view_range or not face and clear[c] >= view_clearance
-                else 2 if face else 1)
-        rank = (tier, costs[c])
+        rank = (clear[c] < view_clearance, costs[c])
         if best is None or rank < best[0]:
             best = (rank, c)
     if best is None:
@@ -401,6 +385,39 @@ def unviewed(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: floa
     return [(int(i), int(j)) for i, j in np.argwhere(far)]
 
 
+def near_unviewed_walls(grid: FloorGrid, ok: np.ndarray, viewed: Sequence, view_range: float) -> list:
+    """Standable cells within half view_range of an occupied cell that is farther than view_range
+    from every viewed point (x, y): a wall the laser saw, the thermal camera not near enough. Why (ideal
+    seed 3 with exploration, facade A's window of floor 1): a UAV kept off the facades saw the room whole
+    from one look, every standable cell within view_range of it, while the room's far wall, where a fire
+    may be, was 3.9 m away."""
+    occupied = np.argwhere(grid.cells == OCCUPIED)
+    if len(occupied) == 0:
+        return []
+    wx, wy = grid.x0 + (occupied[:, 0] + 0.5) * grid.res, grid.y0 + (occupied[:, 1] + 0.5) * grid.res
+    far = np.ones(len(occupied), dtype=bool)
+    for v in viewed:
+        far &= (wx - v[0]) ** 2 + (wy - v[1]) ** 2 > view_range ** 2
+    ii, jj = np.meshgrid(np.arange(grid.nx), np.arange(grid.ny), indexing='ij')
+    xs, ys = grid.x0 + (ii + 0.5) * grid.res, grid.y0 + (jj + 0.5) * grid.res
+    near = np.zeros_like(ok)
+    reach = (0.5 * view_range) ** 2             # well within: a step that sees more than the one wall cell
+    for x, y in zip(wx[far], wy[far]):
+        near |= (xs - x) ** 2 + (ys - y) ** 2 <= reach
+    return [(int(i), int(j)) for i, j in np.argwhere(near & ok)]
+
+
+def wall_bearings(grid: FloorGrid, here: Sequence[float], watched: np.ndarray, view_range: float) -> np.ndarray:
+    """Bearings (rad) from here of the occupied cells within view_range not yet `watched`."""
+    cells = np.argwhere((grid.cells == OCCUPIED) & ~watched)
+    if len(cells) == 0:
+        return np.zeros(0)
+    dx = grid.x0 + (cells[:, 0] + 0.5) * grid.res - here[0]
+    dy = grid.y0 + (cells[:, 1] + 0.5) * grid.res - here[1]
+    near = dx ** 2 + dy ** 2 <= view_range ** 2
+    return np.arctan2(dy[near], dx[near])
+
+
 def headings_to_watch(bearings: np.ndarray, width: float) -> list:
     """The fewest headings whose views (width rad wide, centred on each) hold every bearing: greedy from
     the widest gap between bearings round the turn."""
@@ -415,6 +432,20 @@ def headings_to_watch(bearings: np.ndarray, width: float) -> list:
         out.append(float(ordered[k] + width / 2))
         k = int(np.searchsorted(ordered, ordered[k] + width, side='right'))
     return [math.atan2(math.sin(h), math.cos(h)) for h in out]
+
+
+def watch(grid: FloorGrid, watched: np.ndarray, here: Sequence[float], heading: float, fov: float,
+          view_range: float) -> None:
+    """Marks the occupied cells within view_range and fov (rad, both ways half) of heading from here watched."""
+    cells = np.argwhere(grid.cells == OCCUPIED)
+    if len(cells) == 0:
+        return
+    dx = grid.x0 + (cells[:, 0] + 0.5) * grid.res - here[0]
+    dy = grid.y0 + (cells[:, 1] + 0.5) * grid.res - here[1]
+    off = np.arctan2(dy, dx) - heading
+    off = np.arctan2(np.sin(off), np.cos(off))
+    seen = (dx ** 2 + dy ** 2 <= view_range ** 2) & (np.abs(off) <= fov / 2)
+    watched[cells[seen, 0], cells[seen, 1]] = True
 
 
 __all__ = ['FloorGrid', 'frontiers', 'next_viewpoint', 'straight_legs', 'UNKNOWN', 'FREE', 'OCCUPIED']

@@ -6,9 +6,7 @@ import numpy as np
 import pytest
 
 from laser_world import ANGLE_MIN, INC, cast
-from mbzirc_agents.exploration import (CLEAR_SCANS, FREE, OCCUPIED, UNKNOWN, FloorGrid, headings_to_watch,
-                                       next_viewpoint, route_to)
-from mbzirc_agents.wall_faces import new_watched, wall_bearings, watch
+from mbzirc_agents.exploration import CLEAR_SCANS, FREE, OCCUPIED, UNKNOWN, FloorGrid, next_viewpoint, route_to
 
 OUTLINE = (11.4, 6.7, 24.2, 19.5)     # the tower's public footprint
 T = 0.2
@@ -35,27 +33,16 @@ def scan_points(here, walls, rng=None):
     return np.stack([here[0] + r[ok] * np.cos(a[ok]), here[1] + r[ok] * np.sin(a[ok])], axis=1)
 
 
-def look_around(grid, watched, here, view_range, fov=math.radians(33.0)):
-    """The look-around of tasks/explore.py: the fewest headings that watch every face in range not yet watched."""
-    for yaw in headings_to_watch(wall_bearings(grid, here, watched, view_range), fov - math.radians(3.0)):
-        watch(grid, watched, here, yaw, fov, view_range)
-
-
-def explore(walls, start, steps=40, clearance=0.8, sight=False, view_range=0.0, noisy=False, faces=False, **kw):
-    """Teleporting robot: look, go to the next viewpoint (checking no leg crosses a wall), repeat; with
-    faces, it looks around with the thermal camera at each (the wall faces watched are viewpoints' aims)."""
+def explore(walls, start, steps=40, clearance=0.8, sight=False, view_range=0.0, noisy=False, **kw):
+    """Teleporting robot: look, go to the next viewpoint (checking no leg crosses a wall), repeat."""
     grid = FloorGrid(OUTLINE, 0.25)
     here, visited, looked = tuple(start), [tuple(start)], []
     rng = np.random.default_rng(1) if noisy else None
-    watched = new_watched(grid) if faces else None
     for _ in range(steps):
         for _k in range(3 if noisy else 1):
             grid.add_scan(here, scan_points(here, walls, rng))
         looked.append(here)
-        if faces:
-            look_around(grid, watched, here, view_range)
-        legs = next_viewpoint(grid, here, clearance, 3, (), start if sight else None, looked, view_range,
-                              watched=watched, **kw)
+        legs = next_viewpoint(grid, here, clearance, 3, (), start if sight else None, looked, view_range, **kw)
         if legs is None:
             break
         for leg in legs:
@@ -242,7 +229,7 @@ def test_viewpoints_keep_off_the_outline_where_the_laser_looks_out_through_a_win
     grid's far edge, a cell past the outline, counted as the outline: viewpoints (15.5, 18.6), (15.5, 18.8),
     0.5 m from the wall's inner face; two UAVs hit the wall under the sill there. Every viewpoint keeps the
     clearance from the footprint's outline, and a UAV's outline clearance (its facade room) when given;
-    kept that far off, the room's walls still come within the view range (the wall faces not yet watched)."""
+    kept that far off, the room's walls still come within the view range (view_walls)."""
     from laser_world import wall_boxes
     walls = wall_boxes(7.5) + PLAN_A                   # facade A's window open at the laser's height
     for sight in (True, False):
@@ -250,7 +237,7 @@ def test_viewpoints_keep_off_the_outline_where_the_laser_looks_out_through_a_win
                              view_clearance=2.0)
         assert min(outline_distance(v) for v in visited[1:]) >= 0.8 - 1e-6, visited
     _, visited = explore(walls, (15.5, 17.75), sight=True, view_range=3.5, pass_clearance=0.6,
-                         view_clearance=2.0, outline_clearance=1.75, faces=True)
+                         view_clearance=2.0, outline_clearance=1.75, view_walls=True)
     assert len(visited) > 1 and min(outline_distance(v) for v in visited) >= 1.75 - 1e-6, visited
     # kept off the outline, the room's west wall (3.9 m from the first look) still comes within view range
     assert min(v[0] for v in visited) <= 11.6 + 3.5, visited
@@ -269,10 +256,8 @@ def test_a_uav_whose_pose_moved_nearer_the_facade_still_leaves_for_the_room(shif
     grid = FloorGrid(OUTLINE, 0.25)
     grid.add_scan(looked, scan_points(looked, walls))
     here = (looked[0] + shift[0], looked[1] + shift[1])
-    watched = new_watched(grid)
-    look_around(grid, watched, looked, 3.5)
     legs = next_viewpoint(grid, here, 0.8, 3, (), looked, [looked], 3.5, pass_clearance=0.6,
-                          view_clearance=2.0, outline_clearance=1.75, watched=watched)
+                          view_clearance=2.0, outline_clearance=1.75, view_walls=True)
     assert legs is not None
     assert outline_distance(legs[-1]) >= 1.75 - 1e-6, legs
     path = [here] + legs
@@ -307,11 +292,12 @@ def test_a_look_around_turns_only_to_walls_in_range_not_yet_looked_at():
     """Ideal seed 3 with exploration: at every viewpoint the UAV turned through 12 headings of its 33 deg
     thermal camera (35-50 s), at viewpoints 0.2-0.5 m apart that looked at the same walls again. A look
     turns only to the walls its laser sees within the view range that no earlier look held."""
+    from mbzirc_agents.exploration import headings_to_watch, wall_bearings, watch
     walls = outer_walls() + PLAN_A
     grid = FloorGrid(OUTLINE, 0.25)
     here, fov, rng = (15.0, 12.0), math.radians(33.0), 3.5
     grid.add_scan(here, scan_points(here, walls))
-    watched = new_watched(grid)
+    watched = np.zeros_like(grid.cells, dtype=bool)
     bearings = wall_bearings(grid, here, watched, rng)
     yaws = headings_to_watch(bearings, math.radians(30.0))
     assert 0 < len(yaws) < 12, yaws
@@ -364,96 +350,3 @@ def test_a_scan_marks_the_cells_its_beams_walk_through_and_end_in():
         _walked(walked, origin, pts)
         assert (fast.cells == walked.cells).all() and (fast.misses == walked.misses).all(), origin
     assert (fast.cells == OCCUPIED).any() and (fast.cells == FREE).any() and (fast.misses > 0).any()
-
-
-# c3_floor_plan_b's interior walls (test-only): y = 9.6..9.8 across the tower (doorway x 13-15), x = 18.0..18.2
-# north of it (doorway y 16-18)
-PLAN_FLOOR_B = [(11.6, 9.6, 13.0, 9.8), (15.0, 9.6, 24.0, 9.8), (18.0, 9.8, 18.2, 16.0), (18.0, 18.0, 18.2, 19.3)]
-
-
-def explore_and_look(walls, start, view_range=3.5, fov=math.radians(33.0), steps=40, shift=0.0, noisy=False):
-    """The UGV's exploration of tasks/explore.py, teleporting: look around (every face in range not yet
-    watched), go to the next viewpoint, repeat; the grid's cells shifted by `shift` m in x; noisy: the
-    realistic laser's noise and dropouts, 3 scans a look. The looks made: [(here, yaw)]."""
-    grid = FloorGrid((OUTLINE[0] + shift, *OUTLINE[1:]), 0.25)
-    watched, here, looks, reached = new_watched(grid), tuple(start), [], []
-    rng = np.random.default_rng(3) if noisy else None
-    for _ in range(steps):
-        for _k in range(3 if noisy else 1):
-            grid.add_scan(here, scan_points(here, walls, rng))
-        for yaw in headings_to_watch(wall_bearings(grid, here, watched, view_range), fov - math.radians(3.0)):
-            watch(grid, watched, here, yaw, fov, view_range)
-            looks.append((here, yaw))
-        legs = next_viewpoint(grid, here, 0.8, 3, (), None, [h for h, _ in looks] or [here], view_range,
-                              pass_clearance=0.6, view_clearance=2.0, watched=watched, min_move=0.2,
-                              reached=reached)
-        if legs is None:
-            break
-        here = legs[-1]
-        reached.append(here)
-    return looks
-
-
-def in_a_look(looks, spot, normal, walls, view_range=3.5, half_fov=math.radians(16.5)):
-    """True if a look had spot (a fire on a wall face, its normal) in its camera's view: within range,
-    within the field of view, from the face's side, in straight sight."""
-    front = (spot[0] + 0.05 * normal[0], spot[1] + 0.05 * normal[1])
-    for here, yaw in looks:
-        if math.dist(here, spot) > view_range or (here[0] - spot[0]) * normal[0] + (here[1] - spot[1]) * normal[1] <= 0:
-            continue
-        off = math.remainder(math.atan2(spot[1] - here[1], spot[0] - here[0]) - yaw, 2 * math.pi)
-        if abs(off) <= half_fov and not crosses(here, front, walls, half=0.0):
-            return True
-    return False
-
-
-@pytest.mark.parametrize('shift', [0.0, 0.1])                           # the wall in two cells, in one
-@pytest.mark.parametrize('fire, normal', [((18.0, 12.0), (-1, 0)),     # in0_w
-                                          ((18.2, 13.0), (1, 0)),      # in0_e, the same wall's other face
-                                          ((21.5, 9.6), (0, -1))])     # in1_s's place on the ground floor
-def test_realistic_plan_b_101_the_ugv_looks_at_both_faces_of_a_thin_interior_wall(fire, normal, shift):
-    """c3_floor_plan_b seed 101 (realistic, rtf 4): the UGV looked around 4.0 m from the x 18 wall's west
-    face in the north-west room (beyond the 3.5 m view range, no standable cell farther from its looks),
-    then at the wall's east face from the north-east room; the wall is one grid cell thick, so that look
-    held the west face looked at too: fire in0_w, on the west face, burned the whole trial. Faces are
-    watched from their own side, in sight, and one not watched draws a viewpoint near it."""
-    walls = outer_walls() + PLAN_FLOOR_B
-    looks = explore_and_look(walls, (14.2, 8.6), shift=shift)
-    assert in_a_look(looks, fire, normal, walls), [(tuple(round(v, 1) for v in h), round(math.degrees(y)))
-                                                   for h, y in looks]
-
-
-def test_a_face_is_watched_only_from_its_own_side_and_in_sight():
-    """The x 18 wall (0.2 m thick) in one cell of a grid whose cells start at x 11.5: looked at from every
-    heading in the east room, its east face is watched, its west face not; from the west room, 4 m away
-    (beyond the view range), neither, and a place within half the range that sees it is a viewpoint."""
-    from mbzirc_agents.wall_faces import NORMALS, near_unwatched_faces
-    walls = outer_walls() + PLAN_FLOOR_B
-    grid = FloorGrid((OUTLINE[0] + 0.1, *OUTLINE[1:]), 0.25)
-    east_room, west_room = (20.2, 13.6), (14.0, 12.0)
-    for here in (east_room, west_room):
-        grid.add_scan(here, scan_points(here, walls))
-    wall = grid.cell(18.1, 12.0)
-    assert grid.cells[wall] == OCCUPIED and wall == grid.cell(18.0, 12.0) == grid.cell(18.2, 12.0)
-    east, west = [int(np.flatnonzero((NORMALS == n).all(axis=1))[0]) for n in ((1, 0), (-1, 0))]
-    watched = new_watched(grid)
-    for k in range(12):
-        watch(grid, watched, east_room, k * math.pi / 6, math.radians(33.0), 3.5)
-    assert watched[wall][east] and not watched[wall][west]
-    for k in range(12):
-        watch(grid, watched, west_room, k * math.pi / 6, math.radians(33.0), 3.5)
-    assert not watched[wall][west]                            # 4 m away: beyond the range
-    near = [grid.centre(c) for c in near_unwatched_faces(grid, grid.standable(0.8), watched, 3.5)]
-    assert any(16.25 <= x < 18.0 and 11.0 <= y <= 13.0 for x, y in near), near
-
-
-@pytest.mark.parametrize('plan', [PLAN_A, PLAN_B, PLAN_FLOOR_B])
-def test_realistic_102_a_noisy_laser_does_not_keep_the_exploration_going_to_and_fro(plan):
-    """Realistic seed 102: the UGV went to and fro between two walls of one room for 90 s, viewpoints 0.25 m
-    apart, each for a wall face a noisy scan had made near a look-around, or one a look had not watched. A
-    face within half the view range of a look-around is no viewpoint's aim: with the realistic laser's noise
-    the exploration takes about as many viewpoints as without, every fire place still looked at."""
-    walls = outer_walls() + plan
-    clean = {h for h, _ in explore_and_look(walls, (14.25, 7.8), steps=80)}
-    noisy = {h for h, _ in explore_and_look(walls, (14.25, 7.8), noisy=True, steps=80)}
-    assert len(noisy) <= len(clean) + 10, (len(clean), len(noisy))

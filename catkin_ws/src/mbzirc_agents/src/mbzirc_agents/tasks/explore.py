@@ -10,14 +10,13 @@ the next viewpoint are exploration.py's; this is the task's use of them.
 Rules:
 - the search explores after a path whose last waypoint has no heading (a room's search, not a way out), or
   from where the leg guard stopped a leg of the path inside a building;
-- the next viewpoint is a frontier of the laser's free space, free space farther than
-  ~explore_view_range from everywhere the robot looked around from (the thermal camera sees less far), or
-  a place within half of it that sees a wall face no look has watched (wall_faces.py: a face, not a cell,
-  and only from its own side and in sight); never one gone to before, nor one within ~position_tolerance of the robot (it would not move);
+- the next viewpoint is a frontier of the laser's free space, or free space farther than
+  ~explore_view_range from everywhere the robot looked around from (the thermal camera sees less far);
+  never one gone to before, nor one within ~position_tolerance of the robot (it would not move);
 - a UAV explores at the height fires are expected at (EXPECTED_FIRE_HEIGHT above the floor, from the
   public facade holders), going down to it first; its way back ends at that height;
 - at every viewpoint (the search path's last waypoint first) the robot turns on the spot to the fewest
-  headings whose views of ~forward_camera_fov hold every wall face it sees within ~explore_view_range that
+  headings whose views of ~forward_camera_fov hold every wall its laser sees within ~explore_view_range that
   no earlier look held (~explore_headings > 0: that many round the turn), looking with the thermal camera at
   each (`SearchIndoor._hot`) and adding the laser scans of the look to the floor's grid;
 - viewpoints keep ~explore_view_clearance from the walls where they can, legs ~explore_clearance where
@@ -38,17 +37,19 @@ Rules:
 from __future__ import annotations
 
 import math
-import statistics
 from typing import Optional
+
+import statistics
+
+import numpy as np
 
 from mbzirc_arena.buildings import standing_at
 from mbzirc_arena.c3 import ARENA
 
 from .. import constants as C
 from ..agent_task import TaskError
-from ..exploration import FloorGrid, headings_to_watch, next_viewpoint, route_to
+from ..exploration import FloorGrid, headings_to_watch, next_viewpoint, route_to, wall_bearings, watch
 from ..leg_guard import LegGuard
-from ..wall_faces import new_watched, wall_bearings, watch
 from .uav_motion import facade_room, off_the_facades
 
 
@@ -111,7 +112,7 @@ class Exploration:
         self.skip: list = []
         self.reached: list = []      # viewpoints gone to: not chosen again
         self.looked: list = []       # where it looked around from
-        self.watched = new_watched(self.grid)     # wall faces the thermal camera looked at (wall_faces.py)
+        self.watched = np.zeros_like(self.grid.cells, dtype=bool)   # walls the thermal camera looked at
         self.view_range = self.agent.p.explore_view_range if self.agent.p.explore_view_range > 0 else math.inf
 
     def run(self) -> list:
@@ -135,7 +136,7 @@ class Exploration:
             legs = next_viewpoint(self.grid, a.position(), p.explore_clearance, p.explore_min_frontier,
                                   self.skip, sight, self.looked, p.explore_view_range,
                                   pass_clearance=p.explore_pass_clearance, view_clearance=p.explore_view_clearance,
-                                  outline_clearance=self.outline_room, watched=self.watched,
+                                  outline_clearance=self.outline_room, view_walls=self.outline_room > 0,
                                   min_move=p.position_tolerance, reached=self.reached)
             if legs is None:
                 a.backend.loginfo(f'[{self.task.name}] floor {self.floor}: no frontier left to explore '
