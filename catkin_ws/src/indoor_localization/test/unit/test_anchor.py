@@ -203,19 +203,13 @@ def test_a_correction_moves_the_pose_but_not_the_checks_against_dead_reckoning()
     assert core.refined_anchor().apply(*to_map(*tr))[:2] == pytest.approx((o.x, o.y), abs=1e-9)
 
 
-def test_a_slam_jump_indoors_is_relocalized_on_a_new_map_anchored_by_dead_reckoning():
-    """Explore + GNSS-denied seeds 101 and 102: a UAV's SLAM pose jumped indoors (0.95 rad off the compass
-    in a look-around; 0.42 m off the dead reckoning through a window) and its source stayed "none" for the
-    rest of the trial: it held on the UAL's drifting pose and one hit the building 320 s later. Now the core
-    asks for a new SLAM map and anchors its first pose (the origin) where the dead reckoning says the robot
-    is: the pose is trusted again within a few scans, within the dead reckoning's drift of the truth."""
-    core = IndoorPose()
-    jump_at = 20.0
-    state = {'reset_at': None, 'new_map': None}     # new_map: (theta, x, y) of the new map's origin
+def jumping_slam(core, jump_at, state=None):
+    """A SLAM for fly(): jumped 2 m at jump_at; the first scan after the reset the core asked for is the new
+    map's origin (exactly 0); the core's request is taken at each of its poses. Returns (slam_pose, state:
+    reset_at, new_map (theta, x, y) of the new map's origin)."""
+    state = {'reset_at': None, 'new_map': None} if state is None else state
 
     def slam_pose(t, x, y, yaw):
-        """The SLAM: jumped 2 m at jump_at; the first scan after the reset the core asked for is the new
-        map's origin (exactly 0); the core's request is taken at each of its poses."""
         if core.take_reset_request():
             assert state['reset_at'] is None
             state['reset_at'] = t
@@ -227,6 +221,18 @@ def test_a_slam_jump_indoors_is_relocalized_on_a_new_map_anchored_by_dead_reckon
         th, ox, oy = state['new_map']
         c, s_ = math.cos(th), math.sin(th)
         return c * (x - ox) + s_ * (y - oy), -s_ * (x - ox) + c * (y - oy), wrap_angle(yaw - th)
+    return slam_pose, state
+
+
+def test_a_slam_jump_indoors_is_relocalized_on_a_new_map_anchored_by_dead_reckoning():
+    """Explore + GNSS-denied seeds 101 and 102: a UAV's SLAM pose jumped indoors (0.95 rad off the compass
+    in a look-around; 0.42 m off the dead reckoning through a window) and its source stayed "none" for the
+    rest of the trial: it held on the UAL's drifting pose and one hit the building 320 s later. Now the core
+    asks for a new SLAM map and anchors its first pose (the origin) where the dead reckoning says the robot
+    is: the pose is trusted again within a few scans, within the dead reckoning's drift of the truth."""
+    core = IndoorPose()
+    jump_at = 20.0
+    slam_pose, state = jumping_slam(core, jump_at)
     flown = fly(core, 29.0, (0.0, 0.0), slam_pose=slam_pose)
     outputs = [(t, o, tr[:2]) for t, o, tr in flown]
     reset_at = state['reset_at']
@@ -255,18 +261,7 @@ def test_realistic_104_a_new_map_whose_origin_pose_has_no_ual_pose_is_anchored_a
         if state['reset_at'] is None or not (state['reset_at'] - 0.3 <= t <= state['reset_at'] + 1.0):
             reported(t, *pose)
     core.on_reported = late_reports
-
-    def slam_pose(t, x, y, yaw):
-        if core.take_reset_request():
-            state['reset_at'] = t
-        if state['new_map'] is None and state['reset_at'] is not None and t >= state['reset_at'] + 0.1:
-            state['new_map'] = (yaw, x, y)
-        if state['new_map'] is None:
-            mx, my, myaw = to_map(x, y, yaw)
-            return (mx + 2.0 if t >= jump_at else mx), my, myaw
-        th, ox, oy = state['new_map']
-        c, s_ = math.cos(th), math.sin(th)
-        return c * (x - ox) + s_ * (y - oy), -s_ * (x - ox) + c * (y - oy), wrap_angle(yaw - th)
+    slam_pose, _ = jumping_slam(core, jump_at, state)
     flown = fly(core, 29.0, (0.0, 0.0), slam_pose=slam_pose)
     events = core.pop_events()
     assert any(e.startswith("re-localized") for e in events), events

@@ -144,6 +144,17 @@ def test_no_window_seen_holds_and_fails(uav):
 
 
 
+def enter_and_look(be):
+    """enter_building sent; back once the UAV is there, looking for its window (FINDING). The action."""
+    s = be.servers['enter_building_action']
+    s.send(EnterBuildingGoal(floor=1, entry=goal_pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
+    for _ in range(600):
+        if any('FINDING' in str(f) for f in s.feedback[-3:]):
+            break
+        be.clock.sleep(0.1)
+    return s
+
+
 def test_realistic_103_a_uav_looking_for_a_window_holds_its_place_against_a_gust(uav):
     """Realistic seed 103 (rtf 4): at facade B's floor-1 window, split behind by an interior wall's end (two
     gaps of 0.7 and 1.1 m: no window wide enough), a UAV looking for the window for 10 s on zero-velocity
@@ -158,12 +169,7 @@ def test_realistic_103_a_uav_looking_for_a_window_holds_its_place_against_a_gust
             with ual.lock:
                 ual.pos = ual.pos + np.array([0.0, -0.3 * 0.05, 0.0])
             be.clock.sleep(0.05)
-    s = be.servers['enter_building_action']
-    s.send(EnterBuildingGoal(floor=1, entry=goal_pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
-    for _ in range(600):                     # there, looking
-        if any('FINDING' in str(f) for f in s.feedback[-3:]):
-            break
-        be.clock.sleep(0.1)
+    s = enter_and_look(be)
     start = ual.pos.copy()
     be.clock.start_thread(push, name='gust')
     status = s.wait(120)
@@ -179,12 +185,7 @@ def test_a_pose_step_while_a_uav_looks_for_its_window_does_not_move_it(uav):
     flown back out of the building by it)."""
     agent, ual, be, scene = uav
     scene.boxes = wall_boxes(7.6, openings=[])
-    s = be.servers['enter_building_action']
-    s.send(EnterBuildingGoal(floor=1, entry=goal_pose(WINDOW_X, 20.5, 7.5, -math.pi / 2)))
-    for _ in range(600):                     # there, looking
-        if any('FINDING' in str(f) for f in s.feedback[-3:]):
-            break
-        be.clock.sleep(0.1)
+    s = enter_and_look(be)
     start = ual.pos.copy()
     ual.gnss_offset = np.array([4.0, 0.0, 0.0])
     status = s.wait(120)
