@@ -188,7 +188,7 @@ class IndoorPose:
         self.indoor_track: deque = deque()   # (t, anchored x, y, reported x, y) while the fix is lost
         self.good: deque = deque()            # (t, pose x, y (corrected), reported x, y) while trusted indoors
         self.relocalizing: Optional[tuple] = None   # (jump t, good t, pose x, y, reported x, y) until re-anchored
-        self.new_map_seen = False                    # while re-localizing: the new map's origin came
+        self.new_map_seen = False                    # the new map's origin came (read while re-localizing)
         self.reset_requested = False          # the node should start the SLAM again (taken by take_reset_request)
         self.map_z: Optional[float] = None    # the reported height the SLAM map was started at (on GNSS)
         self.map_asked = False                # a new map was asked for on GNSS: its first pose is no surprise
@@ -356,7 +356,6 @@ class IndoorPose:
         jump_t, good_t, gx, gy, grx, gry = self.relocalizing
         if t - jump_t > self.p.relocalize_timeout:
             self.relocalizing = None
-            self.new_map_seen = False
             self.events.append(f"re-localization: no new SLAM map within {self.p.relocalize_timeout:.0f} s of "
                                f"the jump: no pose until the fix returns")
             return None
@@ -368,7 +367,6 @@ class IndoorPose:
         theta = wrap_angle(rep[3] - yaw)      # the map's pose where the dead reckoning says the robot is
         c, s = math.cos(theta), math.sin(theta)
         self.anchor = Anchor(theta, gx + (rep[0] - grx) - (c * x - s * y), gy + (rep[1] - gry) - (s * x + c * y))
-        self.new_map_seen = False
         self.correction = Anchor(0.0, 0.0, 0.0)
         self.frame_changes += 1               # the outline refinement starts again in the new frame
         self.relocalizing = None

@@ -43,11 +43,13 @@ from sensor_msgs.msg import LaserScan
 from mbzirc_arena.boxes import swept_box
 from mbzirc_arena.buildings import in_footprint, standing_at
 from mbzirc_arena.c3 import ARENA
+from mbzirc_arena.laser import scan_points
 from mbzirc_arena.yaw import wrap_angle
 
 from .. import constants as C
 from ..agent_task import AgentTask, TaskError
-from ..control import OpeningPassage, body_to_world, keep_off_return, nearest_return, world_to_body, yaw_rate_to
+from ..control import (OpeningPassage, body_to_world, keep_off_return, nearest_return, saturate, world_to_body,
+                       yaw_rate_to)
 from ..leg_guard import corridor_distances, is_blind, malformed
 from ..openings import SeenOpening, find_opening, find_openings, side_clearances
 from .uav_motion import facade_room, hold_box, off_the_facades
@@ -488,10 +490,7 @@ class LaserPassage:
         """m to the nearest return straight ahead within the frame's half width (`~frame_radius`), in the
         scan's own frame; inf: none."""
         msg = scan.msg
-        r = np.asarray(msg.ranges, dtype=float)
-        angles = msg.angle_min + msg.angle_increment * np.arange(r.size)
-        ok = np.isfinite(r) & (r >= msg.range_min)
-        points = np.stack([r[ok] * np.cos(angles[ok]), r[ok] * np.sin(angles[ok])], axis=1)
+        points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, range_min=msg.range_min)
         ahead = corridor_distances(points, (0.0, 0.0), (1.0, 0.0), self.agent.p.frame_radius, math.inf)
         return float(ahead.min()) if len(ahead) else math.inf
 
@@ -505,10 +504,7 @@ class LaserPassage:
         now = self.agent.travelled()
         if place is None or now is None:
             return np.zeros(2)
-        back = ctl.gain * (np.asarray(place, dtype=float) - now)
-        speed = float(np.hypot(back[0], back[1]))
-        if speed > ctl.lateral_vmax:
-            back *= ctl.lateral_vmax / speed
+        back = saturate(ctl.gain * (np.asarray(place, dtype=float) - now), ctl.lateral_vmax)
         return np.array(world_to_body((back[0], back[1], 0.0), yaw)[:2])
 
     def _hold(self, heading: float) -> None:
